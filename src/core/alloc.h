@@ -1,0 +1,35 @@
+/* alloc.h — overflow-checked, 64-byte aligned array allocation.
+ *
+ * Every count*size in the library goes through sg_mul_size so that absurd
+ * counts from a file become SG_ERR_NOMEM instead of a short allocation.
+ * Memory from sg_alloc_array must be released with sg_free.
+ */
+#ifndef SG_CORE_ALLOC_H
+#define SG_CORE_ALLOC_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+/* *out = a*b; returns false (and leaves *out untouched) on overflow. */
+static inline bool sg_mul_size(size_t a, size_t b, size_t *out)
+{
+    if (a != 0 && b > (size_t)-1 / a)
+        return false;
+    *out = a * b;
+    return true;
+}
+
+/* count*size bytes, 64-byte aligned, uninitialised; NULL on overflow or
+ * failure. count == 0 returns a valid minimal allocation. */
+void *sg_alloc_array(size_t count, size_t size);
+
+/* Same, zero-filled. */
+void *sg_calloc_array(size_t count, size_t size);
+
+/* Grows *ptr (from sg_alloc_array) to new_count elements, keeping the first
+ * old_count; returns false (leaving *ptr valid) on failure. */
+bool sg_realloc_array(void **ptr, size_t old_count, size_t new_count, size_t size);
+
+void sg_free(void *ptr);
+
+#endif

@@ -1,0 +1,60 @@
+/* ray.h — rays, hits and per-ray traversal statistics (plain values).
+ *
+ * "No hit" is hit.splat == SG_INVALID_ID. Rays carry Kashyap's (2010, §3.6)
+ * "seamless ray tracing" expectation instead of a minimum-distance epsilon:
+ * a ray leaving a surface outward sets SG_RAY_FRONT_ONLY, so the surface it
+ * starts on (seen from behind, dot(dir, n) > 0) is ignored while a real
+ * front-facing surface, however close (a corner), is hit.
+ */
+#ifndef SG_MATH_RAY_H
+#define SG_MATH_RAY_H
+
+#include <stdint.h>
+
+#include "math/vec3.h"
+
+#define SG_INVALID_ID 0xFFFFFFFFu
+
+enum sg_ray_flags {
+    SG_RAY_ANY_FACE = 0,        /* accept the first surface crossing          */
+    SG_RAY_FRONT_ONLY = 1u << 0, /* accept only crossings with dot(dir,n) < 0 */
+    SG_RAY_BACK_ONLY = 1u << 1   /* accept only crossings with dot(dir,n) > 0 */
+};
+
+typedef struct sg_ray {
+    sg_vec3 org;    /* origin, world space                               */
+    sg_vec3 dir;    /* direction, unit length                            */
+    float tmin;     /* search interval [tmin, tmax] along dir             */
+    float tmax;
+    uint32_t flags; /* sg_ray_flags                                       */
+} sg_ray;
+
+typedef struct sg_hit {
+    float t;        /* distance along the ray                            */
+    sg_vec3 p;      /* hit position, world space                         */
+    sg_vec3 n;      /* smooth unit surface normal (the model's outward side) */
+    uint32_t splat; /* splat with the largest weight at p; SG_INVALID_ID = miss */
+} sg_hit;
+
+/* Counters a traversal adds to (once per ray, not per step). The paper's
+ * table (Wald & Seidel 2005, §4.3) reports these per ray. */
+typedef struct sg_ray_stats {
+    uint64_t rays;          /* rays traced                                   */
+    uint64_t nodes;         /* kd-tree node traversal steps (inner + leaf)   */
+    uint64_t leaves;        /* leaf cells visited, empty ones included       */
+    uint64_t isects;        /* surface intersection tests run (non-empty leaves) */
+    uint64_t splats;        /* splats evaluated in those tests               */
+    uint64_t hits;          /* rays that found a surface                     */
+} sg_ray_stats;
+
+static inline void sg_ray_stats_add(sg_ray_stats *a, const sg_ray_stats *b)
+{
+    a->rays += b->rays;
+    a->nodes += b->nodes;
+    a->leaves += b->leaves;
+    a->isects += b->isects;
+    a->splats += b->splats;
+    a->hits += b->hits;
+}
+
+#endif

@@ -1,0 +1,49 @@
+/* test_support.c — see test_support.h. */
+#include "test_support.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+const char *sg_test_tmpdir(void)
+{
+    static char dir[512];
+    if (!dir[0]) {
+        snprintf(dir, sizeof dir, "%s/tmp-%ld", SG_TEST_BINARY_DIR, (long)getpid());
+        mkdir(dir, 0777);
+    }
+    return dir;
+}
+
+const char *sg_test_write_file(const char *name, const void *data, size_t size)
+{
+    static char path[1024];
+    snprintf(path, sizeof path, "%s/%s", sg_test_tmpdir(), name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, size, f), size);
+    assert_int_equal(fclose(f), 0);
+    return path;
+}
+
+const char *sg_test_shared_data(const char *relpath)
+{
+    static char path[1024];
+    snprintf(path, sizeof path, "%s/%s", SG_SHARED_DATA_DIR, relpath);
+    if (access(path, R_OK) != 0) {
+        fprintf(stderr, "skipping: %s not present (../shared/data absent)\n", path);
+        return NULL;
+    }
+    return path;
+}
+
+float sg_test_rand01(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return (float)(z >> 40) * (1.0f / 16777216.0f);
+}

@@ -1,0 +1,29 @@
+/* test_support.h — small helpers shared by the cmocka suites.
+ * cmocka needs these includes in this order. */
+#ifndef SG_TEST_SUPPORT_H
+#define SG_TEST_SUPPORT_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdbool.h>
+
+/* Writes `size` bytes to a fresh file under the test's temp folder and
+ * returns its path (static storage, overwritten by the next call with the
+ * same name). Fails the test on I/O errors. */
+const char *sg_test_write_file(const char *name, const void *data, size_t size);
+
+/* Path of a fresh, empty temporary folder for this test binary. */
+const char *sg_test_tmpdir(void);
+
+/* Path of a file under ../shared/data, or NULL (with a message on stderr
+ * saying the test is skipped) when the folder or file is absent. */
+const char *sg_test_shared_data(const char *relpath);
+
+/* Deterministic uniform float in [0,1) from a 64-bit state (splitmix64). */
+float sg_test_rand01(uint64_t *state);
+
+#endif
