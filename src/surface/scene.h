@@ -57,6 +57,9 @@ typedef struct sg_scene_desc {
     sg_kernel kernel;          /* MLS weight; default SG_KERNEL_HAT             */
     uint32_t kd_disable;       /* sg_kd_disable flags; default 0 (all on)       */
     int samples_per_cell;      /* MLS k samples per leaf interval; default 8    */
+    float max_sample_spacing;  /* MLS: more samples when the spacing would exceed
+                                  this many smallest-radii; default 0.5;
+                                  negative: exactly samples_per_cell (paper)    */
     int max_depth;             /* kd-tree depth limit; default 48               */
     float blend_depth;         /* DISK: blending window, in units of the hit
                                   splat's radius; default 0.5                  */

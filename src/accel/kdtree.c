@@ -1,0 +1,479 @@
+/* kdtree.c — SAH kd-tree builder (Wald & Seidel 2005, §3.4).
+ *
+ * The build runs top-down. A node with many primitives chooses its plane by
+ * binned SAH (32 bins per axis); a node with few tests every primitive
+ * boundary exactly, because near the leaves the planes must hug the surface.
+ * Primitives straddling the plane go to both children. When the SAH prefers
+ * a leaf, the optional shrink hook tightens the cell (§3.4.1) and the planes
+ * that cut the empty slabs off become inner nodes with an empty child.
+ *
+ * Refinements (see kdtree.h flags):
+ *   E(n) = min(1, (95 + 5n) / 200) lowers the estimated cost of small
+ *   children only (§3.4.2), so the SAH keeps splitting where the boxes of
+ *   large splats overestimate the surface; post-collapse (§3.4.3) merges
+ *   splits whose two children both ended up empty.
+ *
+ * Invariants (numbers refer to kdtree.h):
+ *   (1),(2) hold by construction in flatten(); (3) because a primitive is
+ *   dropped from a child only when its box does not reach that side of the
+ *   plane, and from a shrunk leaf only when its box misses the shrunk cell;
+ *   (4) because each subtree is a pure function of (primitives, cell, depth)
+ *   and flatten() walks the finished tree depth-first in one thread.
+ *
+ * The temporary build tree uses one small allocation per node; it is
+ * flattened into the compact arrays and freed before returning.
+ */
+#include "accel/kdtree.h"
+
+#include <assert.h>
+#include <float.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/alloc.h"
+
+enum {
+    BIN_COUNT = 32,          /* bins per axis for the binned SAH                 */
+    EXACT_SAH_MAX = 128,     /* at or below this many primitives, test every edge */
+    TASK_MIN_PRIMS = 4096,   /* spawn an OpenMP task for subtrees this large     */
+    DEFAULT_MAX_DEPTH = 48
+};
+
+/* Wald's empty-space bonus: a split that cuts off an empty slab is worth a
+ * little more than its SAH cost says, because empty space is free to skip. */
+static const float EMPTY_BONUS = 0.8f;
+
+typedef struct bnode {
+    struct bnode *child[2]; /* inner: left (below plane), right              */
+    int axis;               /* 0..2 inner, 3 leaf                            */
+    float split;            /* plane position (inner)                        */
+    uint32_t *prims;        /* leaf: primitive ids (owned), NULL when empty  */
+    size_t count;           /* leaf: number of ids                           */
+    int depth;              /* depth of this node                            */
+} bnode;
+
+typedef struct build_ctx {
+    const sg_kdtree_desc *d;
+    float cost_trav, cost_isec;
+    int max_depth;
+    int failed; /* set (never cleared) when an allocation fails */
+} build_ctx;
+
+static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+static float half_area(sg_aabb b)
+{
+    float dx = b.hi.x - b.lo.x, dy = b.hi.y - b.lo.y, dz = b.hi.z - b.lo.z;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+static float encourage(const build_ctx *c, size_t n)
+{
+    if (!(c->d->flags & SG_KD_BUILD_ENCOURAGE))
+        return 1.0f;
+    float e = (95.0f + 5.0f * (float)n) / 200.0f;
+    return e < 1.0f ? e : 1.0f;
+}
+
+static float axis_lo(sg_aabb b, int a) { return sg_v3_get(b.lo, a); }
+static float axis_hi(sg_aabb b, int a) { return sg_v3_get(b.hi, a); }
+
+static void set_axis(sg_vec3 *v, int a, float x)
+{
+    if (a == 0) v->x = x;
+    else if (a == 1) v->y = x;
+    else v->z = x;
+}
+
+/* SAH cost of splitting `cell` at `pos` on `axis` with nl / nr primitives. */
+static float split_cost(const build_ctx *c, sg_aabb cell, int axis, float pos, size_t nl, size_t nr)
+{
+    sg_aabb l = cell, r = cell;
+    set_axis(&l.hi, axis, pos);
+    set_axis(&r.lo, axis, pos);
+    float inv = 1.0f / (half_area(cell) + FLT_MIN);
+    float cost = c->cost_isec * (half_area(l) * inv * (float)nl * encourage(c, nl) +
+                                 half_area(r) * inv * (float)nr * encourage(c, nr));
+    if (nl == 0 || nr == 0)
+        cost *= EMPTY_BONUS;
+    return c->cost_trav + cost;
+}
+
+typedef struct split_choice {
+    int axis;   /* -1: no split better than a leaf */
+    float pos;
+    float cost;
+} split_choice;
+
+/* A primitive goes left when its box reaches below the plane, right when it
+ * reaches above; a box flat on the plane goes left so that none is lost. */
+static int goes_left(float lo, float hi, float pos) { return lo < pos || (lo == pos && hi == pos); }
+static int goes_right(float lo, float hi, float pos) { (void)lo; return hi > pos; }
+
+static split_choice find_split_binned(const build_ctx *c, const uint32_t *prims, size_t n, sg_aabb cell)
+{
+    split_choice best = {-1, 0.0f, FLT_MAX};
+    for (int a = 0; a < 3; ++a) {
+        float clo = axis_lo(cell, a), chi = axis_hi(cell, a);
+        if (!(chi > clo))
+            continue;
+        uint32_t start[BIN_COUNT] = {0}, end[BIN_COUNT] = {0};
+        float scale = (float)BIN_COUNT / (chi - clo);
+        const float *plo = c->d->lo[a], *phi = c->d->hi[a];
+        for (size_t i = 0; i < n; ++i) {
+            uint32_t p = prims[i];
+            int b0 = (int)clampf((plo[p] - clo) * scale, 0.0f, BIN_COUNT - 1);
+            int b1 = (int)clampf((phi[p] - clo) * scale, 0.0f, BIN_COUNT - 1);
+            start[b0]++;
+            end[b1]++;
+        }
+        size_t nl = 0, nr = n;
+        for (int k = 1; k < BIN_COUNT; ++k) {
+            nl += start[k - 1];
+            nr -= end[k - 1];
+            float pos = clo + (chi - clo) * (float)k / BIN_COUNT;
+            float cost = split_cost(c, cell, a, pos, nl, nr);
+            if (cost < best.cost) {
+                best.axis = a;
+                best.pos = pos;
+                best.cost = cost;
+            }
+        }
+    }
+    return best;
+}
+
+static split_choice find_split_exact(const build_ctx *c, const uint32_t *prims, size_t n, sg_aabb cell)
+{
+    split_choice best = {-1, 0.0f, FLT_MAX};
+    for (int a = 0; a < 3; ++a) {
+        float clo = axis_lo(cell, a), chi = axis_hi(cell, a);
+        const float *plo = c->d->lo[a], *phi = c->d->hi[a];
+        for (size_t e = 0; e < 2 * n; ++e) {
+            uint32_t pe = prims[e >> 1];
+            float pos = (e & 1) ? phi[pe] : plo[pe];
+            if (!(pos > clo && pos < chi))
+                continue;
+            size_t nl = 0, nr = 0;
+            for (size_t i = 0; i < n; ++i) {
+                uint32_t p = prims[i];
+                nl += (size_t)goes_left(plo[p], phi[p], pos);
+                nr += (size_t)goes_right(plo[p], phi[p], pos);
+            }
+            float cost = split_cost(c, cell, a, pos, nl, nr);
+            /* Ties go to the lower (axis, edge) pair: deterministic. */
+            if (cost < best.cost) {
+                best.axis = a;
+                best.pos = pos;
+                best.cost = cost;
+            }
+        }
+    }
+    return best;
+}
+
+static bnode *new_bnode(build_ctx *c, int depth)
+{
+    bnode *b = calloc(1, sizeof *b);
+    if (!b) {
+#pragma omp atomic write
+        c->failed = 1;
+        return NULL;
+    }
+    b->axis = 3;
+    b->depth = depth;
+    return b;
+}
+
+static void free_bnode(bnode *b)
+{
+    if (!b)
+        return;
+    free_bnode(b->child[0]);
+    free_bnode(b->child[1]);
+    sg_free(b->prims);
+    free(b);
+}
+
+static int box_overlaps_cell(const sg_kdtree_desc *d, uint32_t p, sg_aabb cell)
+{
+    return d->lo[0][p] <= cell.hi.x && d->hi[0][p] >= cell.lo.x &&
+           d->lo[1][p] <= cell.hi.y && d->hi[1][p] >= cell.lo.y &&
+           d->lo[2][p] <= cell.hi.z && d->hi[2][p] >= cell.lo.z;
+}
+
+/* Turns `node` into a leaf holding prims (ownership moves), shrinking the
+ * cell first when a hook is given: each face of the cell that moved inward
+ * becomes a plane with an empty child on the outside. */
+static void make_leaf(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_aabb cell)
+{
+    node->axis = 3;
+    if (n == 0 || !c->d->shrink) {
+        node->prims = n ? prims : NULL;
+        node->count = n;
+        if (!n)
+            sg_free(prims);
+        return;
+    }
+    sg_aabb s = cell;
+    if (!c->d->shrink(c->d->shrink_user, prims, n, &s)) {
+        sg_free(prims);
+        node->prims = NULL;
+        node->count = 0;
+        return;
+    }
+    /* Keep the shrunk cell inside the original one. */
+    s.lo = sg_v3_max(s.lo, cell.lo);
+    s.hi = sg_v3_min(s.hi, cell.hi);
+    size_t kept = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (box_overlaps_cell(c->d, prims[i], s))
+            prims[kept++] = prims[i];
+    bnode *cur = node;
+    for (int a = 0; a < 3 && kept; ++a) {
+        for (int side = 0; side < 2; ++side) {
+            float old = side ? axis_hi(cell, a) : axis_lo(cell, a);
+            float now = side ? axis_hi(s, a) : axis_lo(s, a);
+            if (now == old)
+                continue;
+            bnode *empty = new_bnode(c, cur->depth + 1);
+            bnode *rest = new_bnode(c, cur->depth + 1);
+            if (!empty || !rest) {
+                free(empty);
+                free(rest);
+                goto done; /* keep an unshrunk (still correct) leaf */
+            }
+            cur->axis = a;
+            cur->split = now;
+            cur->child[side ? 1 : 0] = empty;
+            cur->child[side ? 0 : 1] = rest;
+            cur = rest;
+        }
+    }
+done:
+    cur->axis = 3;
+    cur->prims = kept ? prims : NULL;
+    cur->count = kept;
+    if (!kept)
+        sg_free(prims);
+}
+
+static void build_rec(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_aabb cell)
+{
+    int failed;
+#pragma omp atomic read
+    failed = c->failed;
+    if (n == 0 || node->depth >= c->max_depth || failed) {
+        make_leaf(c, node, prims, n, cell);
+        return;
+    }
+    split_choice s = n > EXACT_SAH_MAX ? find_split_binned(c, prims, n, cell)
+                                       : find_split_exact(c, prims, n, cell);
+    float leaf_cost = c->cost_isec * (float)n;
+    if (s.axis < 0 || s.cost >= leaf_cost) {
+        make_leaf(c, node, prims, n, cell);
+        return;
+    }
+    const float *plo = c->d->lo[s.axis], *phi = c->d->hi[s.axis];
+    size_t nl = 0, nr = 0;
+    for (size_t i = 0; i < n; ++i) {
+        nl += (size_t)goes_left(plo[prims[i]], phi[prims[i]], s.pos);
+        nr += (size_t)goes_right(plo[prims[i]], phi[prims[i]], s.pos);
+    }
+    if (nl == n && nr == n) { /* the plane separates nothing */
+        make_leaf(c, node, prims, n, cell);
+        return;
+    }
+    uint32_t *left = sg_alloc_array(nl ? nl : 1, sizeof *left);
+    uint32_t *right = sg_alloc_array(nr ? nr : 1, sizeof *right);
+    bnode *cl = new_bnode(c, node->depth + 1), *cr = new_bnode(c, node->depth + 1);
+    if (!left || !right || !cl || !cr) {
+#pragma omp atomic write
+        c->failed = 1;
+        sg_free(left);
+        sg_free(right);
+        free(cl);
+        free(cr);
+        make_leaf(c, node, prims, n, cell);
+        return;
+    }
+    size_t il = 0, ir = 0;
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t p = prims[i];
+        if (goes_left(plo[p], phi[p], s.pos))
+            left[il++] = p;
+        if (goes_right(plo[p], phi[p], s.pos))
+            right[ir++] = p;
+    }
+    assert(il == nl && ir == nr);
+    sg_free(prims);
+    node->axis = s.axis;
+    node->split = s.pos;
+    node->child[0] = cl;
+    node->child[1] = cr;
+    sg_aabb lcell = cell, rcell = cell;
+    set_axis(&lcell.hi, s.axis, s.pos);
+    set_axis(&rcell.lo, s.axis, s.pos);
+    if (n >= TASK_MIN_PRIMS) {
+#pragma omp task default(shared) firstprivate(cl, left, nl, lcell)
+        build_rec(c, cl, left, nl, lcell);
+#pragma omp task default(shared) firstprivate(cr, right, nr, rcell)
+        build_rec(c, cr, right, nr, rcell);
+#pragma omp taskwait
+    } else {
+        build_rec(c, cl, left, nl, lcell);
+        build_rec(c, cr, right, nr, rcell);
+    }
+}
+
+static int is_empty_leaf(const bnode *b) { return b->axis == 3 && b->count == 0; }
+
+/* §3.4.3: a split whose two children are both empty becomes an empty leaf. */
+static void collapse(bnode *b)
+{
+    if (b->axis == 3)
+        return;
+    collapse(b->child[0]);
+    collapse(b->child[1]);
+    if (is_empty_leaf(b->child[0]) && is_empty_leaf(b->child[1])) {
+        free_bnode(b->child[0]);
+        free_bnode(b->child[1]);
+        b->child[0] = b->child[1] = NULL;
+        b->axis = 3;
+        b->prims = NULL;
+        b->count = 0;
+    }
+}
+
+static void count_tree(const bnode *b, size_t *nodes, size_t *leaves, size_t *refs, int *depth)
+{
+    ++*nodes;
+    if (b->depth > *depth)
+        *depth = b->depth;
+    if (b->axis == 3) {
+        ++*leaves;
+        *refs += b->count;
+        return;
+    }
+    count_tree(b->child[0], nodes, leaves, refs, depth);
+    count_tree(b->child[1], nodes, leaves, refs, depth);
+}
+
+typedef struct flat_ctx {
+    sg_kdtree *t;
+    size_t next_node, next_leaf, next_ref;
+} flat_ctx;
+
+static void flatten(flat_ctx *f, const bnode *b, size_t at)
+{
+    sg_kdtree *t = f->t;
+    if (b->axis == 3) {
+        size_t l = f->next_leaf++;
+        t->leaf_first[l] = (uint32_t)f->next_ref;
+        if (b->count)
+            memcpy(t->refs + f->next_ref, b->prims, b->count * sizeof *b->prims);
+        else
+            t->empty_leaf_count++;
+        f->next_ref += b->count;
+        t->nodes[at].word = ((uint32_t)l << 2) | 3u;
+        t->nodes[at].split = 0.0f;
+        return;
+    }
+    size_t child = f->next_node;
+    f->next_node += 2;
+    t->nodes[at].word = ((uint32_t)child << 2) | (uint32_t)b->axis;
+    t->nodes[at].split = b->split;
+    flatten(f, b->child[0], child);
+    flatten(f, b->child[1], child + 1);
+}
+
+sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err)
+{
+    assert(d && out);
+    if (d->count == 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "kd-tree: no primitives");
+    if (d->count > (size_t)UINT32_MAX / 4)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "kd-tree: %zu primitives exceed the 2^30 limit", d->count);
+
+    build_ctx c = {.d = d,
+                   .cost_trav = d->cost_traversal > 0 ? d->cost_traversal : 1.0f,
+                   .cost_isec = d->cost_intersect > 0 ? d->cost_intersect : 1.5f,
+                   .max_depth = d->max_depth > 0 ? d->max_depth : DEFAULT_MAX_DEPTH};
+    sg_status st = SG_OK;
+    sg_kdtree t = {0};
+
+    sg_aabb bounds = sg_aabb_empty();
+    for (size_t i = 0; i < d->count; ++i) {
+        bounds = sg_aabb_grow(bounds, sg_v3(d->lo[0][i], d->lo[1][i], d->lo[2][i]));
+        bounds = sg_aabb_grow(bounds, sg_v3(d->hi[0][i], d->hi[1][i], d->hi[2][i]));
+    }
+    if (!sg_v3_isfinite(bounds.lo) || !sg_v3_isfinite(bounds.hi))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "kd-tree: primitive boxes are not finite");
+
+    uint32_t *all = sg_alloc_array(d->count, sizeof *all);
+    bnode *root = new_bnode(&c, 0);
+    if (!all || !root) {
+        sg_free(all);
+        free(root);
+        return sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory for %zu primitives", d->count);
+    }
+    for (size_t i = 0; i < d->count; ++i)
+        all[i] = (uint32_t)i;
+
+#pragma omp parallel
+#pragma omp single
+    build_rec(&c, root, all, d->count, bounds);
+
+    if (c.failed) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory during build (%zu primitives)", d->count);
+        goto cleanup;
+    }
+    if (d->flags & SG_KD_BUILD_COLLAPSE)
+        collapse(root);
+
+    size_t nodes = 0, leaves = 0, refs = 0;
+    int depth = 0;
+    count_tree(root, &nodes, &leaves, &refs, &depth);
+    if (refs > UINT32_MAX || nodes > UINT32_MAX / 4) {
+        st = sg_error_set(err, SG_ERR_UNSUPPORTED, "kd-tree: %zu references exceed 32-bit indices", refs);
+        goto cleanup;
+    }
+    t.nodes = sg_alloc_array(nodes, sizeof *t.nodes);
+    t.leaf_first = sg_alloc_array(leaves + 1, sizeof *t.leaf_first);
+    t.refs = sg_alloc_array(refs ? refs : 1, sizeof *t.refs);
+    if (!t.nodes || !t.leaf_first || !t.refs) {
+        sg_kdtree_free(&t);
+        st = sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory for %zu nodes", nodes);
+        goto cleanup;
+    }
+    t.node_count = nodes;
+    t.leaf_count = leaves;
+    t.ref_count = refs;
+    t.bounds = bounds;
+    t.depth = depth;
+    flat_ctx f = {.t = &t, .next_node = 1};
+    flatten(&f, root, 0);
+    t.leaf_first[leaves] = (uint32_t)refs;
+    assert(f.next_node == nodes && f.next_leaf == leaves && f.next_ref == refs);
+    *out = t;
+
+cleanup:
+    free_bnode(root);
+    return st;
+}
+
+void sg_kdtree_free(sg_kdtree *t)
+{
+    if (!t)
+        return;
+    sg_free(t->nodes);
+    sg_free(t->leaf_first);
+    sg_free(t->refs);
+    memset(t, 0, sizeof *t);
+}
+
+size_t sg_kdtree_memory(const sg_kdtree *t)
+{
+    return t->node_count * sizeof *t->nodes + (t->leaf_count + 1) * sizeof *t->leaf_first +
+           t->ref_count * sizeof *t->refs;
+}

@@ -1,0 +1,496 @@
+/* mls.c — ray intersection with the implicit MLS surface (Wald & Seidel
+ * 2005, §3.2), and the cell-shrinking hook of their kd-tree (§3.4.1).
+ *
+ * Two departures from the paper, both to sample where the surface can be:
+ *  - F is only defined where some splat's support covers the ray, so the
+ *    samples are spread over [ta, tb], the part of the cell's ray interval
+ *    covered by at least one support sphere, not over the whole cell. The
+ *    tighter the interval, the finer the sampling for the same k.
+ *  - The sample count grows when the spacing would exceed `max_spacing`
+ *    times the smallest radius in play, so a thin part between two samples
+ *    is not skipped; k stays the minimum (the paper's fixed k is kept by
+ *    max_spacing <= 0).
+ * Distances are evaluated from per-splat constants of the ray: with
+ * q = p - o, tc = q.d and perp2 = |q|^2 - tc^2, |x(t) - p|^2 =
+ * (t - tc)^2 + perp2, one fused multiply-add per sample and splat.
+ *
+ * Invariants:
+ *  1. a returned hit lies in [t0, t1] and its crossing is accepted by the
+ *     ray's face flags (entering = F goes from > 0 to <= 0);
+ *  2. samples with W below W_EPS neither make nor break a crossing: across a
+ *     gap in the supports the sign of F carries no information;
+ *  3. the SIMD and the scalar evaluation agree to rounding (tested).
+ */
+#include "surface/mls.h"
+
+#include <assert.h>
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "math/rng.h"
+
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#define SG_MLS_AVX2 1
+#endif
+
+enum {
+    MAX_ACTIVE = 256,   /* splats whose support meets the ray in one leaf   */
+    SHRINK_SLICES = 8,  /* §3.4.1 uses 7-13 slices                          */
+    SHRINK_GRID = 5,    /* samples per slice: GRID x GRID x SHRINK_LAYERS   */
+    SHRINK_LAYERS = 2
+};
+
+/* Weight below which a sample is treated as uncovered (invariant 2). A
+ * single splat reaches this only in the outer 0.01% of its radius. */
+static const float W_EPS = 1e-4f;
+
+static const float GAUSS_E4 = 0.018315638888734f; /* exp(-4) */
+
+float sg_mls_kernel(sg_kernel kernel, float s)
+{
+    if (!(s < 1.0f))
+        return 0.0f;
+    if (kernel == SG_KERNEL_GAUSSIAN)
+        return (expf(-4.0f * s * s) - GAUSS_E4) * (1.0f / (1.0f - GAUSS_E4));
+    return 1.0f - s;
+}
+
+/* Kernel from the squared distance ratio s2 = (d / r)^2. */
+static inline float kernel_sq(sg_kernel kernel, float s2)
+{
+    if (!(s2 < 1.0f))
+        return 0.0f;
+    if (kernel == SG_KERNEL_GAUSSIAN)
+        return (expf(-4.0f * s2) - GAUSS_E4) * (1.0f / (1.0f - GAUSS_E4));
+    return 1.0f - sqrtf(s2);
+}
+
+float sg_mls_field(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, sg_vec3 x,
+                   float *wsum, sg_vec3 *nsum, uint32_t *argmax)
+{
+    float W = 0, wmax = 0;
+    sg_vec3 P = {0, 0, 0}, N = {0, 0, 0};
+    uint32_t best = SG_INVALID_ID;
+    for (size_t i = first; i < first + count; ++i) {
+        float dx = x.x - s->px[i], dy = x.y - s->py[i], dz = x.z - s->pz[i];
+        float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i]);
+        if (w <= 0.0f)
+            continue;
+        W += w;
+        /* Accumulate w (x - p) rather than w p: same F, no cancellation
+         * between W x and sum w p far from the origin. */
+        P = sg_v3_add(P, sg_v3(w * dx, w * dy, w * dz));
+        N = sg_v3_add(N, sg_v3(w * s->nx[i], w * s->ny[i], w * s->nz[i]));
+        if (w > wmax) {
+            wmax = w;
+            best = s->id[i];
+        }
+    }
+    if (wsum) *wsum = W;
+    if (nsum) *nsum = N;
+    if (argmax) *argmax = best;
+    return sg_v3_dot(P, N);
+}
+
+float sg_mls_field_indexed(const sg_pointset *ps, const uint32_t *idx, size_t count, sg_kernel kernel,
+                           sg_vec3 x, float *wsum, sg_vec3 *nsum)
+{
+    float W = 0;
+    sg_vec3 P = {0, 0, 0}, N = {0, 0, 0};
+    for (size_t k = 0; k < count; ++k) {
+        uint32_t i = idx[k];
+        float dx = x.x - ps->px[i], dy = x.y - ps->py[i], dz = x.z - ps->pz[i];
+        float ir = 1.0f / ps->radius[i];
+        float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * ir * ir);
+        if (w <= 0.0f)
+            continue;
+        W += w;
+        P = sg_v3_add(P, sg_v3(w * dx, w * dy, w * dz));
+        N = sg_v3_add(N, sg_v3(w * ps->nx[i], w * ps->ny[i], w * ps->nz[i]));
+    }
+    if (wsum) *wsum = W;
+    if (nsum) *nsum = N;
+    return sg_v3_dot(P, N);
+}
+
+/* The splats of a leaf whose support meets the ray, with the per-ray
+ * constants the sampling loop needs. */
+typedef struct actives {
+    int n;
+    float qx[MAX_ACTIVE], qy[MAX_ACTIVE], qz[MAX_ACTIVE]; /* p - o          */
+    float tc[MAX_ACTIVE];                                 /* q . d          */
+    float perp2[MAX_ACTIVE];                              /* |q|^2 - tc^2   */
+    float inv_r2[MAX_ACTIVE];                             /* 1 / r^2        */
+    float nx[MAX_ACTIVE], ny[MAX_ACTIVE], nz[MAX_ACTIVE];
+    uint32_t id[MAX_ACTIVE];
+} actives;
+
+#ifdef SG_MLS_AVX2
+/* exp(x) for x in [-4, 0] to ~1e-6 relative: 2^(x log2 e) split into an
+ * integer power (exponent bits) and a degree-5 polynomial on [0,1). */
+static inline __m256 exp_m4_0(__m256 x)
+{
+    __m256 y = _mm256_mul_ps(x, _mm256_set1_ps(1.44269504089f));
+    __m256 fl = _mm256_floor_ps(y);
+    __m256 f = _mm256_sub_ps(y, fl);
+    __m256 p = _mm256_set1_ps(1.8775767e-3f);
+    p = _mm256_fmadd_ps(p, f, _mm256_set1_ps(8.9893397e-3f));
+    p = _mm256_fmadd_ps(p, f, _mm256_set1_ps(5.5826318e-2f));
+    p = _mm256_fmadd_ps(p, f, _mm256_set1_ps(2.4015361e-1f));
+    p = _mm256_fmadd_ps(p, f, _mm256_set1_ps(6.9315308e-1f));
+    p = _mm256_fmadd_ps(p, f, _mm256_set1_ps(9.9999994e-1f));
+    __m256i e = _mm256_slli_epi32(_mm256_cvtps_epi32(fl), 23);
+    return _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(p), e));
+}
+#endif
+
+/* F and W at 8 parameters over the active splats (SIMD kernel). */
+static void eval_actives8(const actives *a, sg_kernel kernel, sg_vec3 d, const float t[8], float F[8],
+                          float W[8])
+{
+#ifdef SG_MLS_AVX2
+    const __m256 vt = _mm256_loadu_ps(t), zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    __m256 w_sum = zero, qx = zero, qy = zero, qz = zero, nx = zero, ny = zero, nz = zero;
+    const __m256 ge4 = _mm256_set1_ps(GAUSS_E4), gnorm = _mm256_set1_ps(1.0f / (1.0f - GAUSS_E4));
+    for (int j = 0; j < a->n; ++j) {
+        __m256 dt = _mm256_sub_ps(vt, _mm256_set1_ps(a->tc[j]));
+        __m256 s2 = _mm256_mul_ps(_mm256_fmadd_ps(dt, dt, _mm256_set1_ps(a->perp2[j])),
+                                  _mm256_set1_ps(a->inv_r2[j]));
+        __m256 w;
+        if (kernel == SG_KERNEL_GAUSSIAN) {
+            __m256 g = exp_m4_0(_mm256_max_ps(_mm256_mul_ps(s2, _mm256_set1_ps(-4.0f)), _mm256_set1_ps(-4.0f)));
+            w = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(g, ge4), gnorm), zero);
+        } else {
+            w = _mm256_max_ps(_mm256_sub_ps(one, _mm256_sqrt_ps(s2)), zero);
+        }
+        w_sum = _mm256_add_ps(w_sum, w);
+        qx = _mm256_fmadd_ps(w, _mm256_set1_ps(a->qx[j]), qx);
+        qy = _mm256_fmadd_ps(w, _mm256_set1_ps(a->qy[j]), qy);
+        qz = _mm256_fmadd_ps(w, _mm256_set1_ps(a->qz[j]), qz);
+        nx = _mm256_fmadd_ps(w, _mm256_set1_ps(a->nx[j]), nx);
+        ny = _mm256_fmadd_ps(w, _mm256_set1_ps(a->ny[j]), ny);
+        nz = _mm256_fmadd_ps(w, _mm256_set1_ps(a->nz[j]), nz);
+    }
+    /* sum w (x - p) = t d W - sum w q */
+    __m256 tw = _mm256_mul_ps(vt, w_sum);
+    __m256 ex = _mm256_fmsub_ps(tw, _mm256_set1_ps(d.x), qx);
+    __m256 ey = _mm256_fmsub_ps(tw, _mm256_set1_ps(d.y), qy);
+    __m256 ez = _mm256_fmsub_ps(tw, _mm256_set1_ps(d.z), qz);
+    __m256 f = _mm256_fmadd_ps(ex, nx, _mm256_fmadd_ps(ey, ny, _mm256_mul_ps(ez, nz)));
+    _mm256_storeu_ps(F, f);
+    _mm256_storeu_ps(W, w_sum);
+#else
+    float ws[8] = {0}, qx[8] = {0}, qy[8] = {0}, qz[8] = {0}, nx[8] = {0}, ny[8] = {0}, nz[8] = {0};
+    for (int j = 0; j < a->n; ++j) {
+        for (int l = 0; l < 8; ++l) {
+            float dt = t[l] - a->tc[j];
+            float w = kernel_sq(kernel, (dt * dt + a->perp2[j]) * a->inv_r2[j]);
+            ws[l] += w;
+            qx[l] += w * a->qx[j];
+            qy[l] += w * a->qy[j];
+            qz[l] += w * a->qz[j];
+            nx[l] += w * a->nx[j];
+            ny[l] += w * a->ny[j];
+            nz[l] += w * a->nz[j];
+        }
+    }
+    for (int l = 0; l < 8; ++l) {
+        float tw = t[l] * ws[l];
+        F[l] = (tw * d.x - qx[l]) * nx[l] + (tw * d.y - qy[l]) * ny[l] + (tw * d.z - qz[l]) * nz[l];
+        W[l] = ws[l];
+    }
+#endif
+}
+
+/* Scalar F at one parameter over the actives, with the normal sum and the
+ * dominant splat; used to polish a root. */
+static float eval_actives1(const actives *a, sg_kernel kernel, sg_vec3 d, float t, float *W, sg_vec3 *N,
+                           uint32_t *argmax)
+{
+    float ws = 0, wmax = 0;
+    sg_vec3 q = {0, 0, 0}, n = {0, 0, 0};
+    uint32_t best = SG_INVALID_ID;
+    for (int j = 0; j < a->n; ++j) {
+        float dt = t - a->tc[j];
+        float w = kernel_sq(kernel, (dt * dt + a->perp2[j]) * a->inv_r2[j]);
+        if (w <= 0.0f)
+            continue;
+        ws += w;
+        q = sg_v3_add(q, sg_v3(w * a->qx[j], w * a->qy[j], w * a->qz[j]));
+        n = sg_v3_add(n, sg_v3(w * a->nx[j], w * a->ny[j], w * a->nz[j]));
+        if (w > wmax) {
+            wmax = w;
+            best = a->id[j];
+        }
+    }
+    *W = ws;
+    *N = n;
+    *argmax = best;
+    return sg_v3_dot(sg_v3_sub(sg_v3_scale(d, t * ws), q), n);
+}
+
+/* Collects the leaf's splats whose support sphere meets the ray inside
+ * [t0, t1]; returns 0 when none does, else the covered interval [*ta, *tb].
+ * Returns -1 when more than MAX_ACTIVE qualify. */
+static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, const sg_ray *ray, float t0,
+                          float t1, actives *a, float *ta, float *tb, float *rmin)
+{
+    float lo_all = FLT_MAX, hi_all = -FLT_MAX, r2min = FLT_MAX;
+    int n = 0;
+    const sg_vec3 o = ray->org, d = ray->dir;
+    for (size_t i = first; i < first + count; ++i) {
+        float qx = s->px[i] - o.x, qy = s->py[i] - o.y, qz = s->pz[i] - o.z;
+        float tc = qx * d.x + qy * d.y + qz * d.z;
+        float perp2 = qx * qx + qy * qy + qz * qz - tc * tc;
+        if (perp2 < 0.0f)
+            perp2 = 0.0f;
+        float r2 = s->r[i] * s->r[i];
+        if (perp2 >= r2)
+            continue;
+        float h = sqrtf(r2 - perp2);
+        float lo = tc - h, hi = tc + h;
+        if (hi < t0 || lo > t1)
+            continue;
+        if (n == MAX_ACTIVE)
+            return -1;
+        a->qx[n] = qx;
+        a->qy[n] = qy;
+        a->qz[n] = qz;
+        a->tc[n] = tc;
+        a->perp2[n] = perp2;
+        a->inv_r2[n] = s->inv_r[i] * s->inv_r[i];
+        a->nx[n] = s->nx[i];
+        a->ny[n] = s->ny[i];
+        a->nz[n] = s->nz[i];
+        a->id[n] = s->id[i];
+        ++n;
+        lo_all = lo < lo_all ? lo : lo_all;
+        hi_all = hi > hi_all ? hi : hi_all;
+        r2min = r2 < r2min ? r2 : r2min;
+    }
+    a->n = n;
+    if (!n)
+        return 0;
+    *ta = lo_all > t0 ? lo_all : t0;
+    *tb = hi_all < t1 ? hi_all : t1;
+    *rmin = sqrtf(r2min);
+    return *tb >= *ta;
+}
+
+static int accept_crossing(uint32_t flags, int entering)
+{
+    if (flags & SG_RAY_FRONT_ONLY)
+        return entering;
+    if (flags & SG_RAY_BACK_ONLY)
+        return !entering;
+    return 1;
+}
+
+static int sample_count(const sg_mls_params *mp, float len, float rmin)
+{
+    int k = mp->samples < 2 ? 2 : mp->samples;
+    if (mp->max_spacing > 0.0f && rmin > 0.0f) {
+        float need = ceilf(len / (mp->max_spacing * rmin)) + 1.0f;
+        if (need > (float)k)
+            k = need > SG_MLS_MAX_SAMPLES ? SG_MLS_MAX_SAMPLES : (int)need;
+    }
+    return k > SG_MLS_MAX_SAMPLES ? SG_MLS_MAX_SAMPLES : k;
+}
+
+/* Slow path for a leaf with more than MAX_ACTIVE splats on the ray (rare:
+ * degenerate inputs such as thousands of duplicate points): evaluate the
+ * field from the leaf arrays directly, sample by sample. */
+static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
+                               const sg_ray *ray, float t0, float t1, sg_hit *hit)
+{
+    int k = mp->samples < 2 ? 2 : mp->samples;
+    if (k < SG_MLS_MAX_SAMPLES)
+        k = SG_MLS_MAX_SAMPLES;
+    float prevF = 0.0f, prevT = t0;
+    int prev_ok = 0;
+    for (int j = 0; j < k; ++j) {
+        float t = t0 + (t1 - t0) * (float)j / (float)(k - 1);
+        float W;
+        sg_vec3 N;
+        uint32_t id;
+        float F = sg_mls_field(s, first, count, mp->kernel, sg_v3_madd(ray->org, ray->dir, t), &W, &N, &id);
+        if (W < W_EPS) {
+            prev_ok = 0;
+            continue;
+        }
+        if (prev_ok && ((prevF > 0.0f && F <= 0.0f) || (prevF < 0.0f && F >= 0.0f)) &&
+            accept_crossing(ray->flags, prevF > 0.0f)) {
+            float th = prevT + (t - prevT) * prevF / (prevF - F);
+            hit->t = th;
+            hit->p = sg_v3_madd(ray->org, ray->dir, th);
+            sg_mls_field(s, first, count, mp->kernel, hit->p, &W, &N, &id);
+            hit->n = sg_v3_normalize(N);
+            hit->splat = id;
+            return 1;
+        }
+        prevF = F;
+        prevT = t;
+        prev_ok = 1;
+    }
+    return 0;
+}
+
+void sg_mls_eval8(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, const sg_ray *ray,
+                  const float t[8], float F[8], float W[8])
+{
+    actives a;
+    float ta, tb, rmin;
+    /* Everything on the infinite line, so every splat near the ray counts. */
+    if (gather_actives(s, first, count, ray, -FLT_MAX, FLT_MAX, &a, &ta, &tb, &rmin) < 0) {
+        for (int l = 0; l < 8; ++l)
+            F[l] = sg_mls_field(s, first, count, kernel, sg_v3_madd(ray->org, ray->dir, t[l]), &W[l], NULL, NULL);
+        return;
+    }
+    eval_actives8(&a, kernel, ray->dir, t, F, W);
+}
+
+int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
+                          const sg_ray *ray, float t0, float t1, sg_hit *hit)
+{
+    actives a;
+    float ta, tb, rmin;
+    int g = gather_actives(s, first, count, ray, t0, t1, &a, &ta, &tb, &rmin);
+    if (g == 0)
+        return 0;
+    if (g < 0)
+        return intersect_leaf_slow(s, first, count, mp, ray, t0, t1, hit);
+
+    const sg_vec3 d = ray->dir;
+    int k = sample_count(mp, tb - ta, rmin);
+    float ts[SG_MLS_MAX_SAMPLES + 8], Fs[SG_MLS_MAX_SAMPLES + 8], Ws[SG_MLS_MAX_SAMPLES + 8];
+    float step = k > 1 ? (tb - ta) / (float)(k - 1) : 0.0f;
+    for (int j = 0; j < k; ++j)
+        ts[j] = ta + step * (float)j;
+    ts[k - 1] = tb;
+    for (int j = k; j < ((k + 7) & ~7); ++j)
+        ts[j] = tb;
+
+    float prevF = 0.0f, prevT = ta;
+    int prev_ok = 0;
+    for (int b = 0; b < k; b += 8) {
+        eval_actives8(&a, mp->kernel, d, ts + b, Fs + b, Ws + b);
+        int end = b + 8 < k ? b + 8 : k;
+        for (int j = b; j < end; ++j) {
+            float F = Fs[j];
+            if (Ws[j] < W_EPS) {
+                prev_ok = 0;
+                continue;
+            }
+            int crossing = prev_ok && ((prevF > 0.0f && F <= 0.0f) || (prevF < 0.0f && F >= 0.0f));
+            if (crossing && accept_crossing(ray->flags, prevF > 0.0f)) {
+                /* Linear interpolation (the paper), then two regula-falsi
+                 * steps that keep the bracket [lo, hi]. */
+                float lo = prevT, hi = ts[j], Flo = prevF, Fhi = F;
+                float th = lo + (hi - lo) * Flo / (Flo - Fhi);
+                float W;
+                sg_vec3 N;
+                uint32_t id;
+                for (int it = 0; it < 2; ++it) {
+                    float Fm = eval_actives1(&a, mp->kernel, d, th, &W, &N, &id);
+                    if (W < W_EPS || Fm == 0.0f)
+                        break;
+                    if ((Fm > 0.0f) == (Flo > 0.0f)) {
+                        lo = th;
+                        Flo = Fm;
+                    } else {
+                        hi = th;
+                        Fhi = Fm;
+                    }
+                    th = lo + (hi - lo) * Flo / (Flo - Fhi);
+                }
+                eval_actives1(&a, mp->kernel, d, th, &W, &N, &id);
+                if (id == SG_INVALID_ID) /* root polished into a gap: keep the bracket end */
+                    eval_actives1(&a, mp->kernel, d, th = prevT, &W, &N, &id);
+                hit->t = th;
+                hit->p = sg_v3_madd(ray->org, d, th);
+                hit->n = sg_v3_normalize(N);
+                hit->splat = id;
+                return 1;
+            }
+            prevF = F;
+            prevT = ts[j];
+            prev_ok = 1;
+        }
+    }
+    return 0;
+}
+
+/* ---- §3.4.1 cell shrinking ------------------------------------------------ */
+
+int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb *cell)
+{
+    const sg_mls_shrink_ctx *ctx = user;
+    const sg_pointset *ps = ctx->points;
+    sg_vec3 mean = {0, 0, 0};
+    for (size_t i = 0; i < count; ++i)
+        mean = sg_v3_add(mean, sg_pointset_normal(ps, prims[i]));
+    /* Slice across the dominant axis of the mean normal: the surface runs
+     * roughly along the slices' other two axes, so empty slabs show. */
+    int a = 0;
+    float am[3] = {fabsf(mean.x), fabsf(mean.y), fabsf(mean.z)};
+    if (am[1] > am[a]) a = 1;
+    if (am[2] > am[a]) a = 2;
+    int b = (a + 1) % 3, c = (a + 2) % 3;
+    float lo[3] = {cell->lo.x, cell->lo.y, cell->lo.z}, hi[3] = {cell->hi.x, cell->hi.y, cell->hi.z};
+    float ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    float slice = ext[a] / SHRINK_SLICES;
+    /* A slice may hold the surface if F changes sign in it or some sample
+     * lies within the sampling resolution of the local plane: f = F / (W|N|)
+     * is the signed distance to that plane, so a surface crossing the slice
+     * passes within half a grid-cell diagonal of a sample (1.5x margin). */
+    float gb = ext[b] / SHRINK_GRID, gc = ext[c] / SHRINK_GRID, ga = slice / SHRINK_LAYERS;
+    float eps = 1.5f * 0.5f * sqrtf(gb * gb + gc * gc + ga * ga);
+    /* Jitter keyed by the cell's position: deterministic, thread-independent. */
+    uint64_t key;
+    {
+        uint32_t bits[3];
+        memcpy(bits, lo, sizeof bits);
+        key = ((uint64_t)bits[0] << 32 | bits[1]) ^ ((uint64_t)bits[2] * 0x9E3779B97F4A7C15ull) ^ count;
+    }
+    int first = -1, last = -1;
+    for (int sl = 0; sl < SHRINK_SLICES; ++sl) {
+        float fmin = FLT_MAX, fmax = -FLT_MAX;
+        uint32_t sample = 0;
+        for (int la = 0; la < SHRINK_LAYERS; ++la)
+            for (int ib = 0; ib < SHRINK_GRID; ++ib)
+                for (int ic = 0; ic < SHRINK_GRID; ++ic, ++sample) {
+                    float x[3];
+                    x[a] = lo[a] + slice * ((float)sl + ((float)la + sg_rng_float(key, (uint64_t)sl, sample, 0)) / SHRINK_LAYERS);
+                    x[b] = lo[b] + gb * ((float)ib + sg_rng_float(key, (uint64_t)sl, sample, 1));
+                    x[c] = lo[c] + gc * ((float)ic + sg_rng_float(key, (uint64_t)sl, sample, 2));
+                    float W;
+                    sg_vec3 N;
+                    float F = sg_mls_field_indexed(ps, prims, count, ctx->kernel, sg_v3(x[0], x[1], x[2]), &W, &N);
+                    if (W < W_EPS)
+                        continue;
+                    float nl = sg_v3_length(N);
+                    if (nl <= 0.0f)
+                        continue;
+                    float f = F / (W * nl);
+                    fmin = f < fmin ? f : fmin;
+                    fmax = f > fmax ? f : fmax;
+                }
+        int full = fmin <= eps && fmax >= -eps;
+        if (full) {
+            if (first < 0)
+                first = sl;
+            last = sl;
+        }
+    }
+    if (first < 0)
+        return 0;
+    float nlo = lo[a] + slice * (float)first, nhi = lo[a] + slice * (float)(last + 1);
+    if (last == SHRINK_SLICES - 1)
+        nhi = hi[a]; /* keep the exact face: no rounding gap */
+    if (a == 0) { cell->lo.x = nlo; cell->hi.x = nhi; }
+    else if (a == 1) { cell->lo.y = nlo; cell->hi.y = nhi; }
+    else { cell->lo.z = nlo; cell->hi.z = nhi; }
+    return 1;
+}

@@ -1,0 +1,317 @@
+/* scene.c — the kd-tree over splats and its traversal for both surface
+ * models (Wald & Seidel 2005 §3.2-3.4; Kashyap 2010 §3.3-3.6). See scene.h.
+ *
+ * States: CREATED (arrays copied) -> BUILT (kd-tree) -> PACKED (per-leaf
+ * splat arrays) -> queryable; sg_scene_create runs all three or fails whole.
+ *
+ * Invariants:
+ *  1. soa entries [leaf_first[l], leaf_first[l+1]) are the splats of leaf l,
+ *     in the kd-tree's reference order;
+ *  2. traversal visits leaves in increasing t, so the first accepted MLS
+ *     crossing is the nearest; for disks the blend window may continue into
+ *     later leaves and ends when the next leaf starts beyond it;
+ *  3. queries never write to the scene (thread-safe).
+ */
+#include "surface/scene.h"
+
+#include <assert.h>
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "accel/kdtree.h"
+#include "core/alloc.h"
+#include "surface/disk.h"
+#include "surface/mls.h"
+
+enum { STACK_SIZE = 128 };
+
+struct sg_scene {
+    sg_scene_desc desc;   /* with defaults filled in                        */
+    sg_pointset points;   /* own copy of the input                          */
+    sg_kdtree tree;
+    sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
+    sg_mls_params mls;
+    sg_scene_info info;
+};
+
+static sg_scene_desc with_defaults(const sg_scene_desc *d)
+{
+    sg_scene_desc r = d ? *d : (sg_scene_desc){0};
+    if (r.samples_per_cell <= 0) r.samples_per_cell = 8;
+    if (r.max_sample_spacing == 0.0f) r.max_sample_spacing = 0.5f;
+    if (r.max_depth <= 0) r.max_depth = 48;
+    if (r.blend_depth <= 0.0f) r.blend_depth = 0.5f;
+    return r;
+}
+
+static void free_soa(sg_splat_soa *s)
+{
+    sg_free(s->px); sg_free(s->py); sg_free(s->pz);
+    sg_free(s->nx); sg_free(s->ny); sg_free(s->nz);
+    sg_free(s->r); sg_free(s->inv_r); sg_free(s->id);
+    memset(s, 0, sizeof *s);
+}
+
+static sg_status pack_leaves(sg_scene *sc, sg_error *err)
+{
+    size_t n = sc->tree.ref_count ? sc->tree.ref_count : 1;
+    sg_splat_soa *s = &sc->soa;
+    s->px = sg_alloc_array(n, sizeof(float)); s->py = sg_alloc_array(n, sizeof(float));
+    s->pz = sg_alloc_array(n, sizeof(float)); s->nx = sg_alloc_array(n, sizeof(float));
+    s->ny = sg_alloc_array(n, sizeof(float)); s->nz = sg_alloc_array(n, sizeof(float));
+    s->r = sg_alloc_array(n, sizeof(float)); s->inv_r = sg_alloc_array(n, sizeof(float));
+    s->id = sg_alloc_array(n, sizeof(uint32_t));
+    if (!s->px || !s->py || !s->pz || !s->nx || !s->ny || !s->nz || !s->r || !s->inv_r || !s->id) {
+        free_soa(s);
+        return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory for %zu splat references", n);
+    }
+    const sg_pointset *p = &sc->points;
+    for (size_t k = 0; k < sc->tree.ref_count; ++k) {
+        uint32_t i = sc->tree.refs[k];
+        s->px[k] = p->px[i]; s->py[k] = p->py[i]; s->pz[k] = p->pz[i];
+        s->nx[k] = p->nx[i]; s->ny[k] = p->ny[i]; s->nz[k] = p->nz[i];
+        s->r[k] = p->radius[i];
+        s->inv_r[k] = 1.0f / p->radius[i];
+        s->id[k] = i;
+    }
+    return SG_OK;
+}
+
+sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, sg_scene **out, sg_error *err)
+{
+    double t_start = omp_get_wtime();
+    if (!points || !out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: NULL points or out");
+    if (points->count == 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: the point set is empty");
+    sg_status st = sg_pointset_validate(points, err);
+    if (st != SG_OK)
+        return st;
+    sg_scene_desc d = with_defaults(desc);
+    if (d.model != SG_SURFACE_MLS && d.model != SG_SURFACE_DISK)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: unknown surface model %d", (int)d.model);
+    if (d.kernel != SG_KERNEL_HAT && d.kernel != SG_KERNEL_GAUSSIAN)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: unknown kernel %d", (int)d.kernel);
+
+    sg_scene *sc = sg_calloc_array(1, sizeof *sc);
+    float *box[6] = {0};
+    if (!sc)
+        return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory");
+    sc->desc = d;
+    if ((st = sg_pointset_append(&sc->points, points, err)) != SG_OK)
+        goto fail;
+    size_t n = points->count;
+    for (int k = 0; k < 6; ++k)
+        if (!(box[k] = sg_alloc_array(n, sizeof(float)))) {
+            st = sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory for %zu splat boxes", n);
+            goto fail;
+        }
+    const sg_pointset *p = &sc->points;
+    for (size_t i = 0; i < n; ++i) {
+        float r = p->radius[i];
+        float e[3] = {r, r, r};
+        if (d.model == SG_SURFACE_DISK) {
+            /* A disk's extent along axis a is r * sqrt(1 - n_a^2); pad by a
+             * hair so that a disk flat on a plane still has a box. */
+            float nn[3] = {p->nx[i], p->ny[i], p->nz[i]};
+            for (int a = 0; a < 3; ++a)
+                e[a] = r * sqrtf(fmaxf(0.0f, 1.0f - nn[a] * nn[a])) + 1e-4f * r;
+        }
+        box[0][i] = p->px[i] - e[0]; box[3][i] = p->px[i] + e[0];
+        box[1][i] = p->py[i] - e[1]; box[4][i] = p->py[i] + e[1];
+        box[2][i] = p->pz[i] - e[2]; box[5][i] = p->pz[i] + e[2];
+    }
+    sg_mls_shrink_ctx shrink = {.points = p, .kernel = d.kernel};
+    sg_kdtree_desc kd = {
+        .count = n,
+        .lo = {box[0], box[1], box[2]},
+        .hi = {box[3], box[4], box[5]},
+        .max_depth = d.max_depth,
+        .flags = (d.kd_disable & SG_KD_NO_ENCOURAGE ? 0u : SG_KD_BUILD_ENCOURAGE) |
+                 (d.kd_disable & SG_KD_NO_COLLAPSE ? 0u : SG_KD_BUILD_COLLAPSE),
+        .shrink = (d.model == SG_SURFACE_MLS && !(d.kd_disable & SG_KD_NO_SHRINK)) ? sg_mls_shrink_cell : NULL,
+        .shrink_user = &shrink,
+    };
+    int saved_threads = omp_get_max_threads();
+    if (d.threads > 0)
+        omp_set_num_threads(d.threads);
+    st = sg_kdtree_build(&kd, &sc->tree, err);
+    if (d.threads > 0)
+        omp_set_num_threads(saved_threads);
+    if (st != SG_OK)
+        goto fail;
+    if ((st = pack_leaves(sc, err)) != SG_OK)
+        goto fail;
+    for (int k = 0; k < 6; ++k)
+        sg_free(box[k]);
+
+    sc->mls = (sg_mls_params){.kernel = d.kernel, .samples = d.samples_per_cell,
+                              .max_spacing = d.max_sample_spacing};
+    sg_scene_info *in = &sc->info;
+    in->splat_count = n;
+    in->node_count = sc->tree.node_count;
+    in->leaf_count = sc->tree.leaf_count;
+    in->empty_leaf_count = sc->tree.empty_leaf_count;
+    in->splat_refs = sc->tree.ref_count;
+    in->depth = sc->tree.depth;
+    in->bounds = sc->tree.bounds;
+    in->diagonal = sg_aabb_diagonal(sc->tree.bounds);
+    in->memory_bytes = sizeof *sc + sg_kdtree_memory(&sc->tree) + sc->tree.ref_count * 9 * sizeof(float) +
+                       n * 10 * sizeof(float);
+    in->build_seconds = omp_get_wtime() - t_start;
+    *out = sc;
+    return SG_OK;
+
+fail:
+    for (int k = 0; k < 6; ++k)
+        sg_free(box[k]);
+    sg_scene_destroy(sc);
+    return st;
+}
+
+void sg_scene_destroy(sg_scene *sc)
+{
+    if (!sc)
+        return;
+    sg_pointset_free(&sc->points);
+    sg_kdtree_free(&sc->tree);
+    free_soa(&sc->soa);
+    sg_free(sc);
+}
+
+const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
+
+void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
+
+sg_ray sg_scene_spawn_ray(const sg_hit *h, sg_vec3 dir, float tmax)
+{
+    sg_ray r = {.org = h->p, .dir = dir, .tmin = 0.0f, .tmax = tmax};
+    r.flags = sg_v3_dot(dir, h->n) >= 0.0f ? SG_RAY_FRONT_ONLY : SG_RAY_BACK_ONLY;
+    return r;
+}
+
+/* Slab test against the root cell; NaN-safe: a NaN from 0 * inf loses every
+ * min/max because the comparisons are written so that NaN fails them. */
+static int clip_root(const sg_aabb *b, const sg_ray *ray, const float inv[3], float *t0, float *t1)
+{
+    float lo = ray->tmin, hi = ray->tmax;
+    const float o[3] = {ray->org.x, ray->org.y, ray->org.z};
+    const float bl[3] = {b->lo.x, b->lo.y, b->lo.z}, bh[3] = {b->hi.x, b->hi.y, b->hi.z};
+    for (int a = 0; a < 3; ++a) {
+        float ta = (bl[a] - o[a]) * inv[a], tb = (bh[a] - o[a]) * inv[a];
+        float tn = ta < tb ? ta : tb, tf = ta < tb ? tb : ta;
+        if (tn > lo) lo = tn;
+        if (tf < hi) hi = tf;
+    }
+    *t0 = lo;
+    *t1 = hi;
+    return lo <= hi;
+}
+
+typedef struct stack_entry {
+    uint32_t node;
+    float t0, t1;
+} stack_entry;
+
+enum query { QUERY_NEAREST, QUERY_ANY };
+
+static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats, enum query q)
+{
+    sg_ray_stats st = {.rays = 1};
+    const float inv[3] = {1.0f / ray->dir.x, 1.0f / ray->dir.y, 1.0f / ray->dir.z};
+    const float org[3] = {ray->org.x, ray->org.y, ray->org.z};
+    const sg_kd_node *nodes = sc->tree.nodes;
+    const uint32_t *leaf_first = sc->tree.leaf_first;
+    const int disk = sc->desc.model == SG_SURFACE_DISK;
+    sg_disk_blend blend;
+    sg_disk_blend_init(&blend, sc->desc.blend_depth);
+    stack_entry stack[STACK_SIZE];
+    int sp = 0, found = 0;
+    float t0, t1;
+    if (!clip_root(&sc->tree.bounds, ray, inv, &t0, &t1))
+        goto done;
+    uint32_t ni = 0;
+    for (;;) {
+        sg_kd_node n = nodes[ni];
+        st.nodes++;
+        while (!sg_kd_node_is_leaf(n)) {
+            int a = sg_kd_node_axis(n);
+            uint32_t child = sg_kd_node_index(n);
+            float ts = (n.split - org[a]) * inv[a];
+            int below = org[a] < n.split || (org[a] == n.split && inv[a] <= 0.0f);
+            uint32_t first = below ? child : child + 1, second = below ? child + 1 : child;
+            if (!(ts == ts) || ts > t1 || ts <= 0.0f) {
+                ni = first;
+            } else if (ts < t0) {
+                ni = second;
+            } else {
+                assert(sp < STACK_SIZE);
+                stack[sp++] = (stack_entry){second, ts, t1};
+                ni = first;
+                t1 = ts;
+            }
+            n = nodes[ni];
+            st.nodes++;
+        }
+        uint32_t l = sg_kd_node_index(n);
+        size_t lf = leaf_first[l], lc = leaf_first[l + 1] - lf;
+        st.leaves++;
+        if (lc) {
+            st.isects++;
+            st.splats += lc;
+            if (!disk) {
+                sg_hit h;
+                if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, t0, t1, &h)) {
+                    if (hit)
+                        *hit = h;
+                    found = 1;
+                    goto done;
+                }
+            } else if (q == QUERY_ANY) {
+                if (sg_disk_leaf_any(&sc->soa, lf, lc, ray, t0, t1)) {
+                    found = 1;
+                    goto done;
+                }
+            } else {
+                sg_disk_leaf(&sc->soa, lf, lc, ray, t0, t1, &blend);
+                if (blend.t_end <= t1)
+                    break;
+            }
+        }
+        if (sp == 0)
+            break;
+        --sp;
+        ni = stack[sp].node;
+        t0 = stack[sp].t0;
+        t1 = stack[sp].t1;
+        if (disk && t0 > blend.t_end)
+            break;
+    }
+    if (disk && q == QUERY_NEAREST) {
+        sg_hit h;
+        if (sg_disk_blend_finish(&blend, ray, &h)) {
+            if (hit)
+                *hit = h;
+            found = 1;
+        }
+    }
+done:
+    if (!found && hit)
+        hit->splat = SG_INVALID_ID;
+    st.hits = (uint64_t)found;
+    if (stats)
+        sg_ray_stats_add(stats, &st);
+    return found;
+}
+
+int sg_scene_intersect(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
+{
+    return traverse(sc, ray, hit, stats, QUERY_NEAREST);
+}
+
+int sg_scene_occluded(const sg_scene *sc, const sg_ray *ray, sg_ray_stats *stats)
+{
+    return traverse(sc, ray, NULL, stats, QUERY_ANY);
+}
