@@ -1,0 +1,172 @@
+/* radius.c — splat radius from the distance to the k-th nearest neighbour.
+ *
+ * Job: one batch kNN pass (points/knn.h) gives every point the squared
+ * distance to its k-th nearest other point; radius = scale * sqrt of it.
+ * The k-th-neighbour rule is the common spacing estimate for splat models
+ * (e.g. Kashyap 2010, ch. 3: radii large enough for neighbouring disks to
+ * overlap into a hole-free surface).
+ *
+ * Invariants:
+ *  1. on SG_OK every radius is finite and > 0 (the pointset's invariant 2);
+ *  2. the result is a pure function of positions, k and scale: kNN results
+ *     are unique (ties by index) and the duplicate pass runs sequentially
+ *     in sorted-position order, so the thread count does not matter;
+ *  3. ps->radius is written only after every fallible step succeeded.
+ * Duplicate clusters (k-th distance 0) are grouped by exact position and
+ * resolved with one larger query per cluster, so a cluster of m points
+ * costs O(m log N) once, not m times.
+ */
+#include "points/radius.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/alloc.h"
+
+enum { DEFAULT_K = 8 };
+/* Fallback radius for a cluster with no point at positive distance, as a
+ * fraction of the bounding-box diagonal (DESIGN.md: epsilons relative to
+ * the scene size). Reached only through float underflow of distances. */
+#define FALLBACK_DIAG_FRACTION 1e-3f
+
+typedef struct dup_point {
+    float p[3];  /* position    */
+    uint32_t id; /* point index */
+} dup_point;
+
+static int dup_cmp(const void *va, const void *vb)
+{
+    const dup_point *a = va, *b = vb;
+    for (int c = 0; c < 3; ++c) {
+        if (a->p[c] < b->p[c])
+            return -1;
+        if (a->p[c] > b->p[c])
+            return 1;
+    }
+    return (a->id > b->id) - (a->id < b->id);
+}
+
+static int same_position(const dup_point *a, const dup_point *b)
+{
+    return a->p[0] == b->p[0] && a->p[1] == b->p[1] && a->p[2] == b->p[2];
+}
+
+sg_status sg_points_estimate_radii(sg_pointset *ps, const sg_radius_desc *d, sg_error *err)
+{
+    if (!ps)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "radii: pointset is NULL");
+    sg_radius_desc desc = d ? *d : (sg_radius_desc){0};
+    size_t k = desc.k ? desc.k : DEFAULT_K;
+    float scale = desc.scale != 0.0f ? desc.scale : 1.0f;
+    if (!isfinite(scale) || !(scale > 0.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "radii: scale %g is not finite and positive",
+                            (double)scale);
+    size_t n = ps->count;
+    if (n == 0)
+        return SG_OK;
+    if (n == 1)
+        return sg_error_set(err, SG_ERR_INVALID_ARG,
+                            "radii: a single point has no neighbour to set its radius from");
+    if (desc.knn && sg_knn_count(desc.knn) != n)
+        return sg_error_set(err, SG_ERR_INVALID_ARG,
+                            "radii: shared kNN tree has %zu points, pointset has %zu",
+                            sg_knn_count(desc.knn), n);
+    if (k > n - 1)
+        k = n - 1;
+
+    sg_status st = SG_OK;
+    sg_knn *own = NULL;      /* tree built here when none is shared       */
+    float *d2k = NULL;       /* squared k-th distance per point           */
+    dup_point *dups = NULL;  /* points whose k-th distance is 0, sorted   */
+    uint32_t *qidx = NULL;   /* query scratch for one duplicate cluster   */
+    float *qd2 = NULL;
+    const sg_knn *tree = desc.knn;
+    if (!tree) {
+        sg_knn_desc kd = {.count = n, .px = ps->px, .py = ps->py, .pz = ps->pz};
+        st = sg_knn_create(&kd, &own, err);
+        if (st != SG_OK)
+            goto done;
+        tree = own;
+    }
+    d2k = sg_alloc_array(n, sizeof(float));
+    if (!d2k) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "radii: cannot allocate %zu distances", n);
+        goto done;
+    }
+    st = sg_knn_kth_all(tree, k, d2k, err);
+    if (st != SG_OK)
+        goto done;
+
+    size_t ndup = 0;
+    for (size_t i = 0; i < n; ++i)
+        ndup += d2k[i] == 0.0f;
+    if (ndup > 0) {
+        sg_aabb box = sg_pointset_bounds(ps);
+        float diag = sg_aabb_diagonal(box);
+        if (!(diag > 0.0f)) {
+            st = sg_error_set(err, SG_ERR_INVALID_ARG,
+                              "radii: all %zu points coincide; no spacing to set radii from", n);
+            goto done;
+        }
+        dups = sg_alloc_array(ndup, sizeof(dup_point));
+        if (!dups) {
+            st = sg_error_set(err, SG_ERR_NOMEM, "radii: cannot allocate %zu duplicates", ndup);
+            goto done;
+        }
+        size_t m = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (d2k[i] == 0.0f)
+                dups[m++] = (dup_point){{ps->px[i], ps->py[i], ps->pz[i]}, (uint32_t)i};
+        qsort(dups, ndup, sizeof(dup_point), dup_cmp);
+        size_t maxg = 0; /* largest cluster */
+        for (size_t a = 0, b; a < ndup; a = b) {
+            for (b = a + 1; b < ndup && same_position(&dups[a], &dups[b]); ++b) {
+            }
+            maxg = b - a > maxg ? b - a : maxg;
+        }
+        size_t cap = maxg + k < n ? maxg + k : n;
+        qidx = sg_alloc_array(cap, sizeof(uint32_t));
+        qd2 = sg_alloc_array(cap, sizeof(float));
+        if (!qidx || !qd2) {
+            st = sg_error_set(err, SG_ERR_NOMEM, "radii: cannot allocate %zu query slots", cap);
+            goto done;
+        }
+        for (size_t a = 0, b; a < ndup; a = b) {
+            for (b = a + 1; b < ndup && same_position(&dups[a], &dups[b]); ++b) {
+            }
+            size_t want = (b - a) + k < n ? (b - a) + k : n;
+            sg_vec3 q = sg_v3(dups[a].p[0], dups[a].p[1], dups[a].p[2]);
+            size_t found = sg_knn_query(tree, q, want, SG_KNN_NONE, qidx, qd2);
+            float r2 = 0.0f;       /* k-th positive distance, or the last one */
+            size_t positive = 0;
+            for (size_t j = 0; j < found && positive < k; ++j)
+                if (qd2[j] > 0.0f) {
+                    r2 = qd2[j];
+                    ++positive;
+                }
+            float fallback = FALLBACK_DIAG_FRACTION * diag / scale;
+            for (size_t j = a; j < b; ++j)
+                d2k[dups[j].id] = positive > 0 ? r2 : fallback * fallback;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        float r = scale * sqrtf(d2k[i]);
+        if (!isfinite(r) || !(r > 0.0f)) {
+            st = sg_error_set(err, SG_ERR_INVALID_ARG,
+                              "radii: point %zu: radius %g (scale %g) is not finite and positive",
+                              i, (double)r, (double)scale);
+            goto done;
+        }
+        d2k[i] = r;
+    }
+    memcpy(ps->radius, d2k, n * sizeof(float));
+
+done:
+    sg_free(qd2);
+    sg_free(qidx);
+    sg_free(dups);
+    sg_free(d2k);
+    sg_knn_destroy(own);
+    return st;
+}
