@@ -67,9 +67,14 @@ static float half_area(sg_aabb b)
     return dx * dy + dy * dz + dz * dx;
 }
 
-static float encourage(const build_ctx *c, size_t n)
+/* E(n) for a child with n of the parent's n_parent primitives. Only a child
+ * that actually separates primitives (n < n_parent) is encouraged: lowering
+ * the cost of a child that keeps them all would make cutting off ever
+ * thinner empty slabs look profitable forever; shrinking handles empty
+ * space instead. */
+static float encourage(const build_ctx *c, size_t n, size_t n_parent)
 {
-    if (!(c->d->flags & SG_KD_BUILD_ENCOURAGE))
+    if (!(c->d->flags & SG_KD_BUILD_ENCOURAGE) || n >= n_parent)
         return 1.0f;
     float e = (95.0f + 5.0f * (float)n) / 200.0f;
     return e < 1.0f ? e : 1.0f;
@@ -86,14 +91,14 @@ static void set_axis(sg_vec3 *v, int a, float x)
 }
 
 /* SAH cost of splitting `cell` at `pos` on `axis` with nl / nr primitives. */
-static float split_cost(const build_ctx *c, sg_aabb cell, int axis, float pos, size_t nl, size_t nr)
+static float split_cost(const build_ctx *c, sg_aabb cell, int axis, float pos, size_t nl, size_t nr, size_t n)
 {
     sg_aabb l = cell, r = cell;
     set_axis(&l.hi, axis, pos);
     set_axis(&r.lo, axis, pos);
     float inv = 1.0f / (half_area(cell) + FLT_MIN);
-    float cost = c->cost_isec * (half_area(l) * inv * (float)nl * encourage(c, nl) +
-                                 half_area(r) * inv * (float)nr * encourage(c, nr));
+    float cost = c->cost_isec * (half_area(l) * inv * (float)nl * encourage(c, nl, n) +
+                                 half_area(r) * inv * (float)nr * encourage(c, nr, n));
     if (nl == 0 || nr == 0)
         cost *= EMPTY_BONUS;
     return c->cost_trav + cost;
@@ -132,7 +137,7 @@ static split_choice find_split_binned(const build_ctx *c, const uint32_t *prims,
             nl += start[k - 1];
             nr -= end[k - 1];
             float pos = clo + (chi - clo) * (float)k / BIN_COUNT;
-            float cost = split_cost(c, cell, a, pos, nl, nr);
+            float cost = split_cost(c, cell, a, pos, nl, nr, n);
             if (cost < best.cost) {
                 best.axis = a;
                 best.pos = pos;
@@ -160,7 +165,7 @@ static split_choice find_split_exact(const build_ctx *c, const uint32_t *prims, 
                 nl += (size_t)goes_left(plo[p], phi[p], pos);
                 nr += (size_t)goes_right(plo[p], phi[p], pos);
             }
-            float cost = split_cost(c, cell, a, pos, nl, nr);
+            float cost = split_cost(c, cell, a, pos, nl, nr, n);
             /* Ties go to the lower (axis, edge) pair: deterministic. */
             if (cost < best.cost) {
                 best.axis = a;
