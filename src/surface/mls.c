@@ -146,9 +146,10 @@ static inline __m256 exp_m4_0(__m256 x)
 }
 #endif
 
-/* F and W at 8 parameters over the active splats (SIMD kernel). */
+/* F, W and the normal sum N at 8 parameters over the active splats (SIMD
+ * kernel). N may be NULL. */
 static void eval_actives8(const actives *a, sg_kernel kernel, sg_vec3 d, const float t[8], float F[8],
-                          float W[8])
+                          float W[8], float (*N)[8])
 {
 #ifdef SG_MLS_AVX2
     const __m256 vt = _mm256_loadu_ps(t), zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -181,6 +182,11 @@ static void eval_actives8(const actives *a, sg_kernel kernel, sg_vec3 d, const f
     __m256 f = _mm256_fmadd_ps(ex, nx, _mm256_fmadd_ps(ey, ny, _mm256_mul_ps(ez, nz)));
     _mm256_storeu_ps(F, f);
     _mm256_storeu_ps(W, w_sum);
+    if (N) {
+        _mm256_storeu_ps(N[0], nx);
+        _mm256_storeu_ps(N[1], ny);
+        _mm256_storeu_ps(N[2], nz);
+    }
 #else
     float ws[8] = {0}, qx[8] = {0}, qy[8] = {0}, qz[8] = {0}, nx[8] = {0}, ny[8] = {0}, nz[8] = {0};
     for (int j = 0; j < a->n; ++j) {
@@ -200,78 +206,132 @@ static void eval_actives8(const actives *a, sg_kernel kernel, sg_vec3 d, const f
         float tw = t[l] * ws[l];
         F[l] = (tw * d.x - qx[l]) * nx[l] + (tw * d.y - qy[l]) * ny[l] + (tw * d.z - qz[l]) * nz[l];
         W[l] = ws[l];
+        if (N) {
+            N[0][l] = nx[l];
+            N[1][l] = ny[l];
+            N[2][l] = nz[l];
+        }
     }
 #endif
 }
 
-/* Scalar F at one parameter over the actives, with the normal sum and the
- * dominant splat; used to polish a root. */
-static float eval_actives1(const actives *a, sg_kernel kernel, sg_vec3 d, float t, float *W, sg_vec3 *N,
-                           uint32_t *argmax)
+/* The splat with the largest weight at parameter t (SG_INVALID_ID if none
+ * covers it): the hit's material comes from it. */
+static uint32_t dominant_splat(const actives *a, sg_kernel kernel, float t)
 {
-    float ws = 0, wmax = 0;
-    sg_vec3 q = {0, 0, 0}, n = {0, 0, 0};
+    float wmax = 0.0f;
     uint32_t best = SG_INVALID_ID;
     for (int j = 0; j < a->n; ++j) {
         float dt = t - a->tc[j];
         float w = kernel_sq(kernel, (dt * dt + a->perp2[j]) * a->inv_r2[j]);
-        if (w <= 0.0f)
-            continue;
-        ws += w;
-        q = sg_v3_add(q, sg_v3(w * a->qx[j], w * a->qy[j], w * a->qz[j]));
-        n = sg_v3_add(n, sg_v3(w * a->nx[j], w * a->ny[j], w * a->nz[j]));
         if (w > wmax) {
             wmax = w;
             best = a->id[j];
         }
     }
-    *W = ws;
-    *N = n;
-    *argmax = best;
-    return sg_v3_dot(sg_v3_sub(sg_v3_scale(d, t * ws), q), n);
+    return best;
 }
 
 /* Collects the leaf's splats whose support sphere meets the ray inside
  * [t0, t1]; returns 0 when none does, else the covered interval [*ta, *tb].
- * Returns -1 when more than MAX_ACTIVE qualify. */
+ * Returns -1 when more than MAX_ACTIVE qualify. The AVX2 path tests 8
+ * splats per step and appends the survivors; the scalar loop is the
+ * reference and the fallback. */
+static inline int push_active(const sg_splat_soa *s, size_t i, float qx, float qy, float qz, float tc, float perp2,
+                              actives *a)
+{
+    int n = a->n;
+    if (n == MAX_ACTIVE)
+        return 0;
+    a->qx[n] = qx;
+    a->qy[n] = qy;
+    a->qz[n] = qz;
+    a->tc[n] = tc;
+    a->perp2[n] = perp2;
+    a->inv_r2[n] = s->inv_r[i] * s->inv_r[i];
+    a->nx[n] = s->nx[i];
+    a->ny[n] = s->ny[i];
+    a->nz[n] = s->nz[i];
+    a->id[n] = s->id[i];
+    a->n = n + 1;
+    return 1;
+}
+
 static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, const sg_ray *ray, float t0,
                           float t1, actives *a, float *ta, float *tb, float *rmin)
 {
     float lo_all = FLT_MAX, hi_all = -FLT_MAX, r2min = FLT_MAX;
-    int n = 0;
     const sg_vec3 o = ray->org, d = ray->dir;
-    for (size_t i = first; i < first + count; ++i) {
+    size_t i = first, end = first + count;
+    a->n = 0;
+#ifdef SG_MLS_AVX2
+    const __m256 ox = _mm256_set1_ps(o.x), oy = _mm256_set1_ps(o.y), oz = _mm256_set1_ps(o.z);
+    const __m256 dx = _mm256_set1_ps(d.x), dy = _mm256_set1_ps(d.y), dz = _mm256_set1_ps(d.z);
+    const __m256 vt0 = _mm256_set1_ps(t0), vt1 = _mm256_set1_ps(t1), zero = _mm256_setzero_ps();
+    __m256 vlo = _mm256_set1_ps(FLT_MAX), vhi = _mm256_set1_ps(-FLT_MAX), vr2 = _mm256_set1_ps(FLT_MAX);
+    for (; i + 8 <= end; i += 8) {
+        __m256 qx = _mm256_sub_ps(_mm256_loadu_ps(s->px + i), ox);
+        __m256 qy = _mm256_sub_ps(_mm256_loadu_ps(s->py + i), oy);
+        __m256 qz = _mm256_sub_ps(_mm256_loadu_ps(s->pz + i), oz);
+        __m256 tc = _mm256_fmadd_ps(qx, dx, _mm256_fmadd_ps(qy, dy, _mm256_mul_ps(qz, dz)));
+        __m256 q2 = _mm256_fmadd_ps(qx, qx, _mm256_fmadd_ps(qy, qy, _mm256_mul_ps(qz, qz)));
+        __m256 perp2 = _mm256_max_ps(_mm256_fnmadd_ps(tc, tc, q2), zero);
+        __m256 r = _mm256_loadu_ps(s->r + i);
+        __m256 r2 = _mm256_mul_ps(r, r);
+        __m256 inside = _mm256_cmp_ps(perp2, r2, _CMP_LT_OQ);
+        __m256 h = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(r2, perp2), zero));
+        __m256 lo = _mm256_sub_ps(tc, h), hi = _mm256_add_ps(tc, h);
+        __m256 m = _mm256_and_ps(inside, _mm256_and_ps(_mm256_cmp_ps(hi, vt0, _CMP_GE_OQ),
+                                                        _mm256_cmp_ps(lo, vt1, _CMP_LE_OQ)));
+        int bits = _mm256_movemask_ps(m);
+        if (!bits)
+            continue;
+        vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
+        vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
+        vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
+        float aqx[8], aqy[8], aqz[8], atc[8], ap2[8];
+        _mm256_storeu_ps(aqx, qx);
+        _mm256_storeu_ps(aqy, qy);
+        _mm256_storeu_ps(aqz, qz);
+        _mm256_storeu_ps(atc, tc);
+        _mm256_storeu_ps(ap2, perp2);
+        while (bits) {
+            int l = __builtin_ctz((unsigned)bits);
+            bits &= bits - 1;
+            if (!push_active(s, i + (size_t)l, aqx[l], aqy[l], aqz[l], atc[l], ap2[l], a))
+                return -1;
+        }
+    }
+    {
+        float tmp[8];
+        _mm256_storeu_ps(tmp, vlo);
+        for (int l = 0; l < 8; ++l) lo_all = tmp[l] < lo_all ? tmp[l] : lo_all;
+        _mm256_storeu_ps(tmp, vhi);
+        for (int l = 0; l < 8; ++l) hi_all = tmp[l] > hi_all ? tmp[l] : hi_all;
+        _mm256_storeu_ps(tmp, vr2);
+        for (int l = 0; l < 8; ++l) r2min = tmp[l] < r2min ? tmp[l] : r2min;
+    }
+#endif
+    for (; i < end; ++i) {
         float qx = s->px[i] - o.x, qy = s->py[i] - o.y, qz = s->pz[i] - o.z;
         float tc = qx * d.x + qy * d.y + qz * d.z;
         float perp2 = qx * qx + qy * qy + qz * qz - tc * tc;
         if (perp2 < 0.0f)
             perp2 = 0.0f;
         float r2 = s->r[i] * s->r[i];
-        if (perp2 >= r2)
+        if (!(perp2 < r2))
             continue;
         float h = sqrtf(r2 - perp2);
         float lo = tc - h, hi = tc + h;
         if (hi < t0 || lo > t1)
             continue;
-        if (n == MAX_ACTIVE)
+        if (!push_active(s, i, qx, qy, qz, tc, perp2, a))
             return -1;
-        a->qx[n] = qx;
-        a->qy[n] = qy;
-        a->qz[n] = qz;
-        a->tc[n] = tc;
-        a->perp2[n] = perp2;
-        a->inv_r2[n] = s->inv_r[i] * s->inv_r[i];
-        a->nx[n] = s->nx[i];
-        a->ny[n] = s->ny[i];
-        a->nz[n] = s->nz[i];
-        a->id[n] = s->id[i];
-        ++n;
         lo_all = lo < lo_all ? lo : lo_all;
         hi_all = hi > hi_all ? hi : hi_all;
         r2min = r2 < r2min ? r2 : r2min;
     }
-    a->n = n;
-    if (!n)
+    if (!a->n)
         return 0;
     *ta = lo_all > t0 ? lo_all : t0;
     *tb = hi_all < t1 ? hi_all : t1;
@@ -348,7 +408,7 @@ void sg_mls_eval8(const sg_splat_soa *s, size_t first, size_t count, sg_kernel k
             F[l] = sg_mls_field(s, first, count, kernel, sg_v3_madd(ray->org, ray->dir, t[l]), &W[l], NULL, NULL);
         return;
     }
-    eval_actives8(&a, kernel, ray->dir, t, F, W);
+    eval_actives8(&a, kernel, ray->dir, t, F, W, NULL);
 }
 
 int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
@@ -372,10 +432,14 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
     for (int j = k; j < ((k + 7) & ~7); ++j)
         ts[j] = tb;
 
+    float Ns[3][SG_MLS_MAX_SAMPLES + 8], prevN[3] = {0, 0, 0};
     float prevF = 0.0f, prevT = ta;
     int prev_ok = 0;
     for (int b = 0; b < k; b += 8) {
-        eval_actives8(&a, mp->kernel, d, ts + b, Fs + b, Ws + b);
+        float N8[3][8];
+        eval_actives8(&a, mp->kernel, d, ts + b, Fs + b, Ws + b, N8);
+        for (int c = 0; c < 3; ++c)
+            memcpy(Ns[c] + b, N8[c], sizeof N8[c]);
         int end = b + 8 < k ? b + 8 : k;
         for (int j = b; j < end; ++j) {
             float F = Fs[j];
@@ -385,35 +449,51 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
             }
             int crossing = prev_ok && ((prevF > 0.0f && F <= 0.0f) || (prevF < 0.0f && F >= 0.0f));
             if (crossing && accept_crossing(ray->flags, prevF > 0.0f)) {
-                /* Linear interpolation (the paper), then two regula-falsi
-                 * steps that keep the bracket [lo, hi]. */
-                float lo = prevT, hi = ts[j], Flo = prevF, Fhi = F;
-                float th = lo + (hi - lo) * Flo / (Flo - Fhi);
-                float W;
-                sg_vec3 N;
-                uint32_t id;
-                for (int it = 0; it < 2; ++it) {
-                    float Fm = eval_actives1(&a, mp->kernel, d, th, &W, &N, &id);
-                    if (W < W_EPS || Fm == 0.0f)
-                        break;
-                    if ((Fm > 0.0f) == (Flo > 0.0f)) {
-                        lo = th;
-                        Flo = Fm;
-                    } else {
-                        hi = th;
-                        Fhi = Fm;
-                    }
-                    th = lo + (hi - lo) * Flo / (Flo - Fhi);
+                /* The paper interpolates linearly between the two samples.
+                 * We first resample the bracket with 8 interior samples in
+                 * one SIMD pass (spacing / 9), then interpolate F and the
+                 * normal sum linearly in the sub-bracket holding the sign
+                 * change: position error shrinks ~81-fold for one pass. */
+                float lo = prevT, hi = ts[j], sub_t[10], sub_F[10], sub_W[10], sub_N[3][10];
+                float N8[3][8];
+                sub_t[0] = lo;
+                sub_F[0] = prevF;
+                sub_t[9] = hi;
+                sub_F[9] = F;
+                for (int m = 1; m <= 8; ++m)
+                    sub_t[m] = lo + (hi - lo) * (float)m / 9.0f;
+                eval_actives8(&a, mp->kernel, d, sub_t + 1, sub_F + 1, sub_W + 1, N8);
+                for (int c = 0; c < 3; ++c) {
+                    sub_N[c][0] = prevN[c];
+                    sub_N[c][9] = Ns[c][j];
+                    for (int m = 0; m < 8; ++m)
+                        sub_N[c][m + 1] = N8[c][m];
                 }
-                eval_actives1(&a, mp->kernel, d, th, &W, &N, &id);
-                if (id == SG_INVALID_ID) /* root polished into a gap: keep the bracket end */
-                    eval_actives1(&a, mp->kernel, d, th = prevT, &W, &N, &id);
+                int m = 1;
+                for (; m < 9; ++m)
+                    if (sub_W[m] >= W_EPS && (sub_F[m] > 0.0f) != (sub_F[0] > 0.0f))
+                        break;
+                /* First sample on the far side of zero is m; interpolate in
+                 * [m-1, m] (samples of tiny W inside the bracket cannot occur
+                 * with both ends covered, barring rounding; then fall back). */
+                float fa = sub_F[m - 1], fb = sub_F[m];
+                float u = (fa != fb) ? fa / (fa - fb) : 0.5f;
+                if (!(u >= 0.0f && u <= 1.0f))
+                    u = 0.5f;
+                float th = sub_t[m - 1] + (sub_t[m] - sub_t[m - 1]) * u;
+                sg_vec3 N = sg_v3(sub_N[0][m - 1] + (sub_N[0][m] - sub_N[0][m - 1]) * u,
+                                  sub_N[1][m - 1] + (sub_N[1][m] - sub_N[1][m - 1]) * u,
+                                  sub_N[2][m - 1] + (sub_N[2][m] - sub_N[2][m - 1]) * u);
                 hit->t = th;
                 hit->p = sg_v3_madd(ray->org, d, th);
                 hit->n = sg_v3_normalize(N);
-                hit->splat = id;
+                hit->splat = dominant_splat(&a, mp->kernel, th);
+                if (hit->splat == SG_INVALID_ID)
+                    hit->splat = dominant_splat(&a, mp->kernel, prevT);
                 return 1;
             }
+            for (int c = 0; c < 3; ++c)
+                prevN[c] = Ns[c][j];
             prevF = F;
             prevT = ts[j];
             prev_ok = 1;
