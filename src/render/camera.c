@@ -1,0 +1,94 @@
+/* camera.c — pinhole camera (see camera.h).
+ *
+ * Invariants of a camera built here:
+ *  1. forward, right, up are unit length and mutually orthogonal, with
+ *     right = forward x up_hint normalised and up = right x forward;
+ *  2. tan_half_fov and aspect are finite and > 0.
+ */
+#include "render/camera.h"
+
+#include <math.h>
+
+#define PI_F 3.14159265358979323846f
+
+sg_status sg_camera_look_at(sg_vec3 eye, sg_vec3 look, sg_vec3 up, float vfov_deg, float aspect,
+                            sg_camera *out, sg_error *err)
+{
+    if (!sg_v3_isfinite(eye) || !sg_v3_isfinite(look) || !sg_v3_isfinite(up))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: eye, look and up must be finite");
+    if (!(vfov_deg > 0.0f && vfov_deg < 180.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: fov %g is outside (0, 180) degrees",
+                            (double)vfov_deg);
+    if (!(aspect > 0.0f) || !isfinite(aspect))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: aspect %g must be > 0", (double)aspect);
+    sg_vec3 d = sg_v3_sub(look, eye);
+    float len = sg_v3_length(d);
+    if (!(len > 0.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: eye and look are the same point");
+    sg_vec3 f = sg_v3_scale(d, 1.0f / len);
+    sg_vec3 u = sg_v3_normalize(up);
+    sg_vec3 r = sg_v3_cross(f, u);
+    /* |f x u| = sin(angle): below ~0.06 degrees the frame is ill-defined. */
+    if (!(sg_v3_length(r) > 1e-3f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: up (%g,%g,%g) is parallel to the view direction",
+                            (double)up.x, (double)up.y, (double)up.z);
+    r = sg_v3_normalize(r);
+    sg_camera cam = {
+        .eye = eye,
+        .forward = f,
+        .right = r,
+        .up = sg_v3_cross(r, f),
+        .tan_half_fov = tanf(0.5f * vfov_deg * PI_F / 180.0f),
+        .aspect = aspect,
+    };
+    *out = cam;
+    return SG_OK;
+}
+
+sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int height)
+{
+    /* Screen coordinates in [-1, 1], +y up; the centre maps to exactly 0 so
+     * the centre ray is the view direction. */
+    float sx = 2.0f * px / (float)width - 1.0f;
+    float sy = 1.0f - 2.0f * py / (float)height;
+    sg_vec3 d = cam->forward;
+    d = sg_v3_madd(d, cam->right, sx * cam->tan_half_fov * cam->aspect);
+    d = sg_v3_madd(d, cam->up, sy * cam->tan_half_fov);
+    sg_ray ray = {
+        .org = cam->eye,
+        .dir = sg_v3_normalize(d),
+        .tmin = 0.0f,
+        .tmax = INFINITY,
+        .flags = SG_RAY_ANY_FACE,
+    };
+    return ray;
+}
+
+sg_status sg_camera_frame(sg_aabb bounds, sg_vec3 view_dir, sg_vec3 up, float vfov_deg, float aspect,
+                          float margin, sg_camera *out, sg_error *err)
+{
+    if (!(bounds.hi.x >= bounds.lo.x && bounds.hi.y >= bounds.lo.y && bounds.hi.z >= bounds.lo.z) ||
+        !sg_v3_isfinite(bounds.lo) || !sg_v3_isfinite(bounds.hi))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: the box to frame is empty or not finite");
+    if (margin == 0.0f)
+        margin = 1.1f;
+    if (!(margin > 0.0f) || !isfinite(margin))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: margin %g must be > 0", (double)margin);
+    sg_vec3 dir = sg_v3_normalize(view_dir);
+    if (!sg_v3_isfinite(view_dir) || sg_v3_dot(dir, dir) == 0.0f)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: view direction has zero length");
+    if (!(vfov_deg > 0.0f && vfov_deg < 180.0f) || !(aspect > 0.0f) || !isfinite(aspect))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "camera: fov %g or aspect %g out of range",
+                            (double)vfov_deg, (double)aspect);
+    sg_vec3 centre = sg_v3_scale(sg_v3_add(bounds.lo, bounds.hi), 0.5f);
+    float radius = 0.5f * sg_aabb_diagonal(bounds);
+    if (!(radius > 0.0f))
+        radius = 1.0f; /* a single point: any distance frames it */
+    float tv = tanf(0.5f * vfov_deg * PI_F / 180.0f);
+    float th = tv * aspect;
+    /* A sphere of radius r fits a half-angle a at distance r / sin(a). */
+    float half = atanf(th < tv ? th : tv);
+    float dist = margin * radius / sinf(half);
+    sg_vec3 eye = sg_v3_madd(centre, dir, -dist);
+    return sg_camera_look_at(eye, centre, up, vfov_deg, aspect, out, err);
+}

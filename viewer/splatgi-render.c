@@ -1,0 +1,353 @@
+/* splatgi-render — headless frame renderer: loads a model (or the default
+ * scene), builds the ray-tracing scene, renders one primary ray per pixel
+ * and writes an EXR or PNG. Options, library calls and a report; no
+ * algorithm lives here. Run with --help for the options.
+ */
+#include <errno.h>
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <omp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "io/image.h"
+#include "render/camera.h"
+#include "render/default_scene.h"
+#include "render/render.h"
+#include "surface/scene.h"
+
+#define DEFAULT_OUT "out/render.png"
+
+static const char usage[] =
+    "usage: splatgi-render [options]\n"
+    "Renders a point model (or the built-in bunny scene) with one ray per pixel.\n"
+    "\n"
+    "Model\n"
+    "  --model PATH        .ply or .obj; a mesh is sampled to --points splats,\n"
+    "                      a point cloud uses its vertices\n"
+    "  --default           the built-in scene: bunny on a ground plane (also when\n"
+    "                      no --model is given)\n"
+    "  --points N          samples on a mesh (default 250000)\n"
+    "  --radius-k K        splat radius from the K-th nearest neighbour (default 8)\n"
+    "  --radius-scale S    radius multiplier (default 1)\n"
+    "Surface\n"
+    "  --surface mls|disk  implicit MLS surface (default) or blended disks\n"
+    "  --kernel hat|gaussian   MLS weight (default hat)\n"
+    "  --samples K         MLS samples per leaf interval (default 8)\n"
+    "  --no-shrink --no-encourage --no-collapse   turn off a kd-tree refinement\n"
+    "  --no-refine         turn off all three\n"
+    "Frame\n"
+    "  --shade simple|phong|normals   (default simple: |n.v|, no shadows)\n"
+    "  --width W --height H           image size (default 512 x 512)\n"
+    "  --eye x,y,z --look x,y,z --up x,y,z --fov DEG   camera (default: framed\n"
+    "                      3/4 view; --look defaults to the model's centre)\n"
+    "  --light x,y,z       direction towards the light (phong)\n"
+    "  --threads N         OpenMP threads (default: all)\n"
+    "  --repeat N          render N times, report best and mean (default 1)\n"
+    "  --out FILE          .exr (scene-linear) or .png (sRGB); default " DEFAULT_OUT "\n"
+    "  --stats             print per-ray traversal statistics and scene facts\n"
+    "  --help              this text\n";
+
+typedef struct options {
+    const char *model;          /* NULL: default scene                  */
+    sg_model_points_desc points;
+    sg_scene_desc scene;
+    sg_shade_mode shade;
+    int width, height;
+    int have_eye, have_look, have_up, have_light;
+    sg_vec3 eye, look, up, light;
+    float fov;                  /* degrees                              */
+    int threads;
+    int repeat;
+    const char *out;
+    int stats;
+} options;
+
+static int fail(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+static int fail(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "splatgi-render: ");
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+    return 1;
+}
+
+static int parse_long(const char *opt, const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi) {
+        char range[64];
+        snprintf(range, sizeof range, "an integer in [%ld, %ld]", lo, hi);
+        fprintf(stderr, "splatgi-render: %s: '%s' is not %s\n", opt, s, range);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+static int parse_float(const char *opt, const char *s, float lo, float *out)
+{
+    char *end;
+    errno = 0;
+    float v = strtof(s, &end);
+    if (errno || end == s || *end || !isfinite(v) || !(v > lo)) {
+        fprintf(stderr, "splatgi-render: %s: '%s' is not a number > %g\n", opt, s, (double)lo);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+static int parse_vec3(const char *opt, const char *s, sg_vec3 *out)
+{
+    float v[3];
+    const char *p = s;
+    for (int i = 0; i < 3; i++) {
+        char *end;
+        errno = 0;
+        v[i] = strtof(p, &end);
+        if (errno || end == p || !isfinite(v[i]) || (i < 2 ? *end != ',' : *end != '\0')) {
+            fprintf(stderr, "splatgi-render: %s: '%s' is not x,y,z\n", opt, s);
+            return 0;
+        }
+        p = end + 1;
+    }
+    *out = sg_v3(v[0], v[1], v[2]);
+    return 1;
+}
+
+/* Returns 0 to go on, 1 for an error, 2 after --help. */
+static int parse_args(int argc, char **argv, options *o)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        /* Flags without a value. */
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            fputs(usage, stdout);
+            return 2;
+        }
+        if (!strcmp(a, "--default")) { o->model = NULL; continue; }
+        if (!strcmp(a, "--stats")) { o->stats = 1; continue; }
+        if (!strcmp(a, "--no-shrink")) { o->scene.kd_disable |= SG_KD_NO_SHRINK; continue; }
+        if (!strcmp(a, "--no-encourage")) { o->scene.kd_disable |= SG_KD_NO_ENCOURAGE; continue; }
+        if (!strcmp(a, "--no-collapse")) { o->scene.kd_disable |= SG_KD_NO_COLLAPSE; continue; }
+        if (!strcmp(a, "--no-refine")) { o->scene.kd_disable |= SG_KD_NO_REFINEMENTS; continue; }
+        static const char *const with_value[] = {
+            "--model", "--points", "--radius-k", "--radius-scale", "--surface", "--kernel",
+            "--samples", "--shade", "--width", "--height", "--eye", "--look", "--up", "--light",
+            "--fov", "--threads", "--repeat", "--out"};
+        int known = 0;
+        for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
+            known |= !strcmp(a, with_value[k]);
+        if (!known)
+            return fail(strncmp(a, "--", 2) ? "unexpected argument '%s' (see --help)"
+                                            : "unknown option '%s' (see --help)", a);
+        if (i + 1 >= argc)
+            return fail("%s needs a value", a);
+        const char *v = argv[++i];
+        long n;
+        if (!strcmp(a, "--model")) {
+            o->model = v;
+        } else if (!strcmp(a, "--points")) {
+            if (!parse_long(a, v, 1, 1L << 31, &n)) return 1;
+            o->points.points = (size_t)n;
+        } else if (!strcmp(a, "--radius-k")) {
+            if (!parse_long(a, v, 1, 256, &n)) return 1;
+            o->points.radius_k = (unsigned)n;
+        } else if (!strcmp(a, "--radius-scale")) {
+            if (!parse_float(a, v, 0.0f, &o->points.radius_scale)) return 1;
+        } else if (!strcmp(a, "--surface")) {
+            if (!strcmp(v, "mls")) o->scene.model = SG_SURFACE_MLS;
+            else if (!strcmp(v, "disk")) o->scene.model = SG_SURFACE_DISK;
+            else return fail("--surface: '%s' is not mls or disk", v);
+        } else if (!strcmp(a, "--kernel")) {
+            if (!strcmp(v, "hat")) o->scene.kernel = SG_KERNEL_HAT;
+            else if (!strcmp(v, "gaussian")) o->scene.kernel = SG_KERNEL_GAUSSIAN;
+            else return fail("--kernel: '%s' is not hat or gaussian", v);
+        } else if (!strcmp(a, "--samples")) {
+            if (!parse_long(a, v, 1, 1024, &n)) return 1;
+            o->scene.samples_per_cell = (int)n;
+        } else if (!strcmp(a, "--shade")) {
+            if (!strcmp(v, "simple")) o->shade = SG_SHADE_SIMPLE;
+            else if (!strcmp(v, "phong")) o->shade = SG_SHADE_PHONG;
+            else if (!strcmp(v, "normals")) o->shade = SG_SHADE_NORMALS;
+            else return fail("--shade: '%s' is not simple, phong or normals", v);
+        } else if (!strcmp(a, "--width")) {
+            if (!parse_long(a, v, 1, SG_IMAGE_MAX_DIM, &n)) return 1;
+            o->width = (int)n;
+        } else if (!strcmp(a, "--height")) {
+            if (!parse_long(a, v, 1, SG_IMAGE_MAX_DIM, &n)) return 1;
+            o->height = (int)n;
+        } else if (!strcmp(a, "--eye")) {
+            if (!parse_vec3(a, v, &o->eye)) return 1;
+            o->have_eye = 1;
+        } else if (!strcmp(a, "--look")) {
+            if (!parse_vec3(a, v, &o->look)) return 1;
+            o->have_look = 1;
+        } else if (!strcmp(a, "--up")) {
+            if (!parse_vec3(a, v, &o->up)) return 1;
+            o->have_up = 1;
+        } else if (!strcmp(a, "--light")) {
+            if (!parse_vec3(a, v, &o->light)) return 1;
+            o->have_light = 1;
+        } else if (!strcmp(a, "--fov")) {
+            if (!parse_float(a, v, 0.0f, &o->fov)) return 1;
+            if (!(o->fov < 180.0f)) return fail("--fov: '%s' is not below 180 degrees", v);
+        } else if (!strcmp(a, "--threads")) {
+            if (!parse_long(a, v, 1, 4096, &n)) return 1;
+            o->threads = (int)n;
+        } else if (!strcmp(a, "--repeat")) {
+            if (!parse_long(a, v, 1, 100000, &n)) return 1;
+            o->repeat = (int)n;
+        } else if (!strcmp(a, "--out")) {
+            o->out = v;
+        }
+    }
+    return 0;
+}
+
+static void print_stats(const options *o, const sg_scene_info *info, const sg_render_stats *st,
+                        double best, double mean, size_t splats)
+{
+    const sg_ray_stats *p = &st->primary;
+    double r = p->rays ? (double)p->rays : 1.0;
+    printf("\n%-28s %s\n", "surface", o->scene.model == SG_SURFACE_DISK ? "disk" : "mls");
+    printf("%-28s %zu\n", "splats", splats);
+    printf("%-28s %.3f s\n", "build time", info->build_seconds);
+    printf("%-28s %.1f MiB\n", "scene memory", (double)info->memory_bytes / (1024.0 * 1024.0));
+    printf("%-28s %zu nodes, %zu leaves (%zu empty), depth %d\n", "kd-tree", info->node_count,
+           info->leaf_count, info->empty_leaf_count, info->depth);
+    printf("%-28s %.2f\n", "splat refs per splat",
+           info->splat_count ? (double)info->splat_refs / (double)info->splat_count : 0.0);
+    printf("%-28s %.2f\n", "splat refs per full leaf",
+           info->leaf_count > info->empty_leaf_count
+               ? (double)info->splat_refs / (double)(info->leaf_count - info->empty_leaf_count)
+               : 0.0);
+    printf("\nper primary ray (%llu rays, %.1f%% hit)\n", (unsigned long long)p->rays,
+           100.0 * (double)p->hits / r);
+    printf("  %-26s %.2f\n", "nodes traversed", (double)p->nodes / r);
+    printf("  %-26s %.2f\n", "leaves visited", (double)p->leaves / r);
+    printf("  %-26s %.2f\n", "intersection tests", (double)p->isects / r);
+    printf("  %-26s %.2f\n", "splats evaluated", (double)p->splats / r);
+    if (st->shadow_rays) {
+        const sg_ray_stats *s = &st->shadow;
+        double rs = s->rays ? (double)s->rays : 1.0;
+        printf("per shadow ray (%llu rays, %.1f%% occluded)\n", (unsigned long long)s->rays,
+               100.0 * (double)s->hits / rs);
+        printf("  %-26s %.2f\n", "nodes traversed", (double)s->nodes / rs);
+        printf("  %-26s %.2f\n", "splats evaluated", (double)s->splats / rs);
+    }
+    printf("\n%-28s %.2f (best), %.2f (mean)\n", "Mrays/s", (double)st->rays / best * 1e-6,
+           (double)st->rays / mean * 1e-6);
+    printf("%-28s %.2f (best), %.2f (mean)\n", "fps", 1.0 / best, 1.0 / mean);
+    printf("%-28s %d\n", "threads", o->threads > 0 ? o->threads : omp_get_max_threads());
+}
+
+int main(int argc, char **argv)
+{
+    options o = {.width = 512, .height = 512, .fov = 40.0f, .repeat = 1, .out = DEFAULT_OUT};
+    int pr = parse_args(argc, argv, &o);
+    if (pr)
+        return pr == 2 ? 0 : 1;
+    if (!strcmp(o.out, DEFAULT_OUT))
+        mkdir("out", 0777); /* the default folder; an error shows at write time */
+
+    int code = 1;
+    sg_error err = {0};
+    sg_default_scene def = {0};
+    sg_pointset model = {0};
+    const sg_pointset *points;
+    sg_aabb bounds;          /* what the camera frames */
+    sg_vec3 light = sg_v3(-0.5f, 0.8f, 0.45f);
+    sg_scene *scene = NULL;
+    sg_image img = {0};
+    sg_render_desc rd = {.width = o.width, .height = o.height, .shade = o.shade, .threads = o.threads};
+    float aspect = (float)o.width / (float)o.height;
+
+    if (o.model) {
+        if (sg_model_points_load(o.model, &o.points, &model, &err) != SG_OK)
+            goto done;
+        points = &model;
+        bounds = sg_pointset_bounds(&model);
+    } else {
+        sg_default_scene_desc dd = {.model = o.points};
+        if (sg_default_scene_load(&dd, &def, &err) != SG_OK)
+            goto done;
+        points = &def.points;
+        bounds = def.model_bounds;
+        light = def.light_dir;
+    }
+    if (o.have_light)
+        light = o.light;
+    rd.light_dir = light;
+
+    /* Camera: explicit eye wins; otherwise the default scene's view or a
+     * framed 3/4 view of the model. */
+    sg_vec3 centre = sg_v3_scale(sg_v3_add(bounds.lo, bounds.hi), 0.5f);
+    sg_vec3 up = o.have_up ? o.up : sg_v3(0, 1, 0);
+    sg_status st;
+    if (o.have_eye)
+        st = sg_camera_look_at(o.eye, o.have_look ? o.look : centre, up, o.fov, aspect, &rd.camera, &err);
+    else if (!o.model && !o.have_look && !o.have_up)
+        st = sg_default_scene_camera(&def, o.fov, aspect, &rd.camera, &err);
+    else {
+        sg_vec3 target = o.have_look ? o.look : centre;
+        sg_aabb box = {sg_v3_add(bounds.lo, sg_v3_sub(target, centre)),
+                       sg_v3_add(bounds.hi, sg_v3_sub(target, centre))};
+        st = sg_camera_frame(box, sg_v3(-0.6f, -0.35f, -1.0f), up, o.fov, aspect, 0.0f, &rd.camera, &err);
+    }
+    if (st != SG_OK)
+        goto done;
+
+    if (sg_scene_create(&o.scene, points, &scene, &err) != SG_OK)
+        goto done;
+    size_t splats = points->count;
+    sg_pointset_free(&model);
+    sg_default_scene_free(&def);
+
+    sg_render_stats stats = {0};
+    double best = DBL_MAX, total = 0.0;
+    for (int r = 0; r < o.repeat; r++) {
+        sg_image_free(&img);
+        if (sg_render_frame(scene, &rd, &img, &stats, &err) != SG_OK)
+            goto done;
+        best = stats.seconds < best ? stats.seconds : best;
+        total += stats.seconds;
+    }
+    double mean = total / o.repeat;
+    if (!(best > 0.0)) best = 1e-9;
+    if (!(mean > 0.0)) mean = 1e-9;
+    if (sg_image_write(&img, o.out, 1.0f, &err) != SG_OK)
+        goto done;
+
+    sg_scene_info info;
+    sg_scene_get_info(scene, &info);
+    printf("splatgi-render: %dx%d, %zu splats, build %.2f s, frame %.1f ms best / %.1f ms mean "
+           "(%d run%s), %.2f Mrays/s -> %s\n",
+           img.width, img.height, splats, info.build_seconds, best * 1e3, mean * 1e3, o.repeat,
+           o.repeat == 1 ? "" : "s", (double)stats.rays / best * 1e-6, o.out);
+    if (o.stats)
+        print_stats(&o, &info, &stats, best, mean, splats);
+    code = 0;
+done:
+    if (code)
+        fprintf(stderr, "splatgi-render: %s\n", err.message[0] ? err.message : "failed");
+    sg_image_free(&img);
+    sg_scene_destroy(scene);
+    sg_pointset_free(&model);
+    sg_default_scene_free(&def);
+    return code;
+}
