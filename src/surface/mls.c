@@ -412,10 +412,15 @@ void sg_mls_eval8(const sg_splat_soa *s, size_t first, size_t count, sg_kernel k
 }
 
 int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
-                          const sg_ray *ray, float t0, float t1, sg_hit *hit)
+                          const sg_ray *ray, float t0, float t1, sg_hit *hit, sg_mls_carry *carry)
 {
     actives a;
     float ta, tb, rmin;
+    sg_mls_carry in = {0};
+    if (carry) {
+        in = *carry;
+        carry->valid = 0;
+    }
     int g = gather_actives(s, first, count, ray, t0, t1, &a, &ta, &tb, &rmin);
     if (g == 0)
         return 0;
@@ -435,6 +440,11 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
     float Ns[3][SG_MLS_MAX_SAMPLES + 8], prevN[3] = {0, 0, 0};
     float prevF = 0.0f, prevT = ta;
     int prev_ok = 0;
+    if (in.valid && in.t == ta) { /* the previous leaf ended where this one starts */
+        prev_ok = 1;
+        prevF = in.F;
+        memcpy(prevN, in.N, sizeof prevN);
+    }
     for (int b = 0; b < k; b += 8) {
         float N8[3][8];
         eval_actives8(&a, mp->kernel, d, ts + b, Fs + b, Ws + b, N8);
@@ -498,6 +508,12 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
             prevT = ts[j];
             prev_ok = 1;
         }
+    }
+    if (carry && prev_ok && prevT == t1) {
+        carry->valid = 1;
+        carry->t = t1;
+        carry->F = prevF;
+        memcpy(carry->N, prevN, sizeof prevN);
     }
     return 0;
 }

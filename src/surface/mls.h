@@ -47,11 +47,22 @@ float sg_mls_field(const sg_splat_soa *s, size_t first, size_t count, sg_kernel 
 float sg_mls_field_indexed(const sg_pointset *ps, const uint32_t *idx, size_t count, sg_kernel kernel,
                            sg_vec3 x, float *wsum, sg_vec3 *nsum);
 
+/* The last sample of the previous leaf, handed to the next one. Two leaves
+ * evaluate F at their shared face from different splat lists, so the two
+ * values can differ in sign by rounding when the surface passes through
+ * the face: comparing across the face catches that crossing. */
+typedef struct sg_mls_carry {
+    int valid;      /* the previous leaf's last sample lies at t with W > 0 */
+    float t, F;
+    float N[3];
+} sg_mls_carry;
+
 /* Nearest accepted crossing of F along ray within [t0, t1] using the leaf's
  * splats [first, first+count). Returns 1 and fills hit (t, p, n, splat).
- * *visited is increased by count. */
+ * carry (may be NULL) comes from the previous leaf on the ray and is
+ * updated for the next one. */
 int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
-                          const sg_ray *ray, float t0, float t1, sg_hit *hit);
+                          const sg_ray *ray, float t0, float t1, sg_hit *hit, sg_mls_carry *carry);
 
 /* Evaluates F and W at 8 ray parameters t[0..7] with the SIMD kernel
  * (scalar loop in the portable build) over the leaf's splats. Exposed so a

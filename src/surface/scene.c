@@ -227,6 +227,7 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
     const int disk = sc->desc.model == SG_SURFACE_DISK;
     sg_disk_blend blend;
     sg_disk_blend_init(&blend, sc->desc.blend_depth);
+    sg_mls_carry carry = {0};
     stack_entry stack[STACK_SIZE];
     int sp = 0, found = 0;
     float t0, t1;
@@ -263,7 +264,7 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
             st.splats += lc;
             if (!disk) {
                 sg_hit h;
-                if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, t0, t1, &h)) {
+                if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, t0, t1, &h, &carry)) {
                     if (hit)
                         *hit = h;
                     found = 1;
@@ -280,6 +281,8 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
                     break;
             }
         }
+        else
+            carry.valid = 0; /* an empty leaf: the supports have a gap here */
         if (sp == 0)
             break;
         --sp;
