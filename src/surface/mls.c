@@ -28,6 +28,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/alloc.h"
 #include "math/rng.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
@@ -520,13 +521,134 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
 
 /* ---- §3.4.1 cell shrinking ------------------------------------------------ */
 
+/* The splats of a leaf-to-be, gathered once for the many field samples of
+ * the shrink test. */
+typedef struct shrink_splats {
+    size_t n;
+    float *px, *py, *pz, *nx, *ny, *nz, *inv_r2;
+} shrink_splats;
+
+/* Signed distances to the local MLS plane, f = F / (W |N|), at 8 points
+ * (SIMD over the points); ok[l] = 0 where W is too small to say. */
+static void plane_distance8(const shrink_splats *sp, sg_kernel kernel, const float x[3][8], float f[8], int ok[8])
+{
+    float W[8], E[3][8], N[3][8];
+#ifdef SG_MLS_AVX2
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 x0 = _mm256_loadu_ps(x[0]), x1 = _mm256_loadu_ps(x[1]), x2 = _mm256_loadu_ps(x[2]);
+    const __m256 ge4 = _mm256_set1_ps(GAUSS_E4), gnorm = _mm256_set1_ps(1.0f / (1.0f - GAUSS_E4));
+    __m256 ws = zero, ex = zero, ey = zero, ez = zero, nx = zero, ny = zero, nz = zero;
+    for (size_t i = 0; i < sp->n; ++i) {
+        __m256 dx = _mm256_sub_ps(x0, _mm256_set1_ps(sp->px[i]));
+        __m256 dy = _mm256_sub_ps(x1, _mm256_set1_ps(sp->py[i]));
+        __m256 dz = _mm256_sub_ps(x2, _mm256_set1_ps(sp->pz[i]));
+        __m256 s2 = _mm256_mul_ps(_mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz))),
+                                  _mm256_set1_ps(sp->inv_r2[i]));
+        __m256 w;
+        if (kernel == SG_KERNEL_GAUSSIAN) {
+            __m256 g = exp_m4_0(_mm256_max_ps(_mm256_mul_ps(s2, _mm256_set1_ps(-4.0f)), _mm256_set1_ps(-4.0f)));
+            w = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(g, ge4), gnorm), zero);
+        } else {
+            w = _mm256_max_ps(_mm256_sub_ps(one, _mm256_sqrt_ps(s2)), zero);
+        }
+        ws = _mm256_add_ps(ws, w);
+        ex = _mm256_fmadd_ps(w, dx, ex);
+        ey = _mm256_fmadd_ps(w, dy, ey);
+        ez = _mm256_fmadd_ps(w, dz, ez);
+        nx = _mm256_fmadd_ps(w, _mm256_set1_ps(sp->nx[i]), nx);
+        ny = _mm256_fmadd_ps(w, _mm256_set1_ps(sp->ny[i]), ny);
+        nz = _mm256_fmadd_ps(w, _mm256_set1_ps(sp->nz[i]), nz);
+    }
+    _mm256_storeu_ps(W, ws);
+    _mm256_storeu_ps(E[0], ex); _mm256_storeu_ps(E[1], ey); _mm256_storeu_ps(E[2], ez);
+    _mm256_storeu_ps(N[0], nx); _mm256_storeu_ps(N[1], ny); _mm256_storeu_ps(N[2], nz);
+#else
+    memset(W, 0, sizeof W);
+    memset(E, 0, sizeof E);
+    memset(N, 0, sizeof N);
+    for (size_t i = 0; i < sp->n; ++i)
+        for (int l = 0; l < 8; ++l) {
+            float dx = x[0][l] - sp->px[i], dy = x[1][l] - sp->py[i], dz = x[2][l] - sp->pz[i];
+            float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * sp->inv_r2[i]);
+            W[l] += w;
+            E[0][l] += w * dx; E[1][l] += w * dy; E[2][l] += w * dz;
+            N[0][l] += w * sp->nx[i]; N[1][l] += w * sp->ny[i]; N[2][l] += w * sp->nz[i];
+        }
+#endif
+    for (int l = 0; l < 8; ++l) {
+        float nl = sqrtf(N[0][l] * N[0][l] + N[1][l] * N[1][l] + N[2][l] * N[2][l]);
+        ok[l] = W[l] >= W_EPS && nl > 0.0f;
+        f[l] = ok[l] ? (E[0][l] * N[0][l] + E[1][l] * N[1][l] + E[2][l] * N[2][l]) / (W[l] * nl) : 0.0f;
+    }
+}
+
+/* Whether slice `sl` may hold the surface: F changes sign in it, or some
+ * sample lies within eps of the local plane. Stops at the first batch of 8
+ * samples that decides it. Samples: a jittered GRID x GRID x LAYERS lattice,
+ * the jitter from one hash per slice plus a Kronecker (R3) sequence. */
+static int slice_may_hold_surface(const shrink_splats *sp, sg_kernel kernel, const float lo[3], const float ext[3],
+                                  int a, int sl, float eps, uint64_t key)
+{
+    int b = (a + 1) % 3, c = (a + 2) % 3;
+    float slice = ext[a] / SHRINK_SLICES;
+    float j0 = sg_rng_float(key, (uint64_t)sl, 0, 0), j1 = sg_rng_float(key, (uint64_t)sl, 0, 1),
+          j2 = sg_rng_float(key, (uint64_t)sl, 0, 2);
+    float fmin = FLT_MAX, fmax = -FLT_MAX;
+    enum { TOTAL = SHRINK_LAYERS * SHRINK_GRID * SHRINK_GRID };
+    for (int base = 0; base < TOTAL; base += 8) {
+        float x[3][8], f[8];
+        int ok[8];
+        for (int l = 0; l < 8; ++l) {
+            int sample = base + l < TOTAL ? base + l : TOTAL - 1;
+            int la = sample / (SHRINK_GRID * SHRINK_GRID), ib = (sample / SHRINK_GRID) % SHRINK_GRID,
+                ic = sample % SHRINK_GRID;
+            /* R3 sequence offsets (Roberts 2018), shifted per slice. */
+            float u0 = j0 + 0.8191725f * (float)sample, u1 = j1 + 0.6710436f * (float)sample,
+                  u2 = j2 + 0.5497005f * (float)sample;
+            u0 -= floorf(u0); u1 -= floorf(u1); u2 -= floorf(u2);
+            x[a][l] = lo[a] + slice * ((float)sl + ((float)la + u0) / SHRINK_LAYERS);
+            x[b][l] = lo[b] + ext[b] / SHRINK_GRID * ((float)ib + u1);
+            x[c][l] = lo[c] + ext[c] / SHRINK_GRID * ((float)ic + u2);
+        }
+        plane_distance8(sp, kernel, x, f, ok);
+        for (int l = 0; l < 8; ++l) {
+            if (!ok[l])
+                continue;
+            fmin = f[l] < fmin ? f[l] : fmin;
+            fmax = f[l] > fmax ? f[l] : fmax;
+        }
+        if (fmin <= eps && fmax >= -eps)
+            return 1;
+    }
+    return 0;
+}
+
 int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb *cell)
 {
     const sg_mls_shrink_ctx *ctx = user;
     const sg_pointset *ps = ctx->points;
+    enum { LOCAL = 64 };
+    float local[7][LOCAL];
+    float *buf = NULL;
+    shrink_splats sp = {.n = count};
+    if (count <= LOCAL) {
+        sp.px = local[0]; sp.py = local[1]; sp.pz = local[2];
+        sp.nx = local[3]; sp.ny = local[4]; sp.nz = local[5]; sp.inv_r2 = local[6];
+    } else {
+        buf = sg_alloc_array(count, 7 * sizeof(float));
+        if (!buf)
+            return 1; /* cannot test: keep the cell as it is (always correct) */
+        sp.px = buf; sp.py = buf + count; sp.pz = buf + 2 * count;
+        sp.nx = buf + 3 * count; sp.ny = buf + 4 * count; sp.nz = buf + 5 * count; sp.inv_r2 = buf + 6 * count;
+    }
     sg_vec3 mean = {0, 0, 0};
-    for (size_t i = 0; i < count; ++i)
-        mean = sg_v3_add(mean, sg_pointset_normal(ps, prims[i]));
+    for (size_t k = 0; k < count; ++k) {
+        uint32_t i = prims[k];
+        sp.px[k] = ps->px[i]; sp.py[k] = ps->py[i]; sp.pz[k] = ps->pz[i];
+        sp.nx[k] = ps->nx[i]; sp.ny[k] = ps->ny[i]; sp.nz[k] = ps->nz[i];
+        sp.inv_r2[k] = 1.0f / (ps->radius[i] * ps->radius[i]);
+        mean = sg_v3_add(mean, sg_pointset_normal(ps, i));
+    }
     /* Slice across the dominant axis of the mean normal: the surface runs
      * roughly along the slices' other two axes, so empty slabs show. */
     int a = 0;
@@ -536,12 +658,10 @@ int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb 
     int b = (a + 1) % 3, c = (a + 2) % 3;
     float lo[3] = {cell->lo.x, cell->lo.y, cell->lo.z}, hi[3] = {cell->hi.x, cell->hi.y, cell->hi.z};
     float ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-    float slice = ext[a] / SHRINK_SLICES;
-    /* A slice may hold the surface if F changes sign in it or some sample
-     * lies within the sampling resolution of the local plane: f = F / (W|N|)
-     * is the signed distance to that plane, so a surface crossing the slice
-     * passes within half a grid-cell diagonal of a sample (1.5x margin). */
-    float gb = ext[b] / SHRINK_GRID, gc = ext[c] / SHRINK_GRID, ga = slice / SHRINK_LAYERS;
+    /* f = F / (W|N|) is the signed distance to the local plane, so a surface
+     * crossing the slice passes within half a lattice-cell diagonal of some
+     * sample: eps is that, with a 1.5x margin for the plane's curvature. */
+    float gb = ext[b] / SHRINK_GRID, gc = ext[c] / SHRINK_GRID, ga = ext[a] / SHRINK_SLICES / SHRINK_LAYERS;
     float eps = 1.5f * 0.5f * sqrtf(gb * gb + gc * gc + ga * ga);
     /* Jitter keyed by the cell's position: deterministic, thread-independent. */
     uint64_t key;
@@ -550,41 +670,20 @@ int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb 
         memcpy(bits, lo, sizeof bits);
         key = ((uint64_t)bits[0] << 32 | bits[1]) ^ ((uint64_t)bits[2] * 0x9E3779B97F4A7C15ull) ^ count;
     }
-    int first = -1, last = -1;
-    for (int sl = 0; sl < SHRINK_SLICES; ++sl) {
-        float fmin = FLT_MAX, fmax = -FLT_MAX;
-        uint32_t sample = 0;
-        for (int la = 0; la < SHRINK_LAYERS; ++la)
-            for (int ib = 0; ib < SHRINK_GRID; ++ib)
-                for (int ic = 0; ic < SHRINK_GRID; ++ic, ++sample) {
-                    float x[3];
-                    x[a] = lo[a] + slice * ((float)sl + ((float)la + sg_rng_float(key, (uint64_t)sl, sample, 0)) / SHRINK_LAYERS);
-                    x[b] = lo[b] + gb * ((float)ib + sg_rng_float(key, (uint64_t)sl, sample, 1));
-                    x[c] = lo[c] + gc * ((float)ic + sg_rng_float(key, (uint64_t)sl, sample, 2));
-                    float W;
-                    sg_vec3 N;
-                    float F = sg_mls_field_indexed(ps, prims, count, ctx->kernel, sg_v3(x[0], x[1], x[2]), &W, &N);
-                    if (W < W_EPS)
-                        continue;
-                    float nl = sg_v3_length(N);
-                    if (nl <= 0.0f)
-                        continue;
-                    float f = F / (W * nl);
-                    fmin = f < fmin ? f : fmin;
-                    fmax = f > fmax ? f : fmax;
-                }
-        int full = fmin <= eps && fmax >= -eps;
-        if (full) {
-            if (first < 0)
-                first = sl;
-            last = sl;
-        }
-    }
-    if (first < 0)
+    /* Only the ends can be cut off, so search inwards from both sides. */
+    int first = 0, last = SHRINK_SLICES - 1;
+    while (first < SHRINK_SLICES && !slice_may_hold_surface(&sp, ctx->kernel, lo, ext, a, first, eps, key))
+        ++first;
+    if (first == SHRINK_SLICES) {
+        sg_free(buf);
         return 0;
-    float nlo = lo[a] + slice * (float)first, nhi = lo[a] + slice * (float)(last + 1);
-    if (last == SHRINK_SLICES - 1)
-        nhi = hi[a]; /* keep the exact face: no rounding gap */
+    }
+    while (last > first && !slice_may_hold_surface(&sp, ctx->kernel, lo, ext, a, last, eps, key))
+        --last;
+    sg_free(buf);
+    float slice = ext[a] / SHRINK_SLICES;
+    float nlo = first == 0 ? lo[a] : lo[a] + slice * (float)first;
+    float nhi = last == SHRINK_SLICES - 1 ? hi[a] : lo[a] + slice * (float)(last + 1);
     if (a == 0) { cell->lo.x = nlo; cell->hi.x = nhi; }
     else if (a == 1) { cell->lo.y = nlo; cell->hi.y = nhi; }
     else { cell->lo.z = nlo; cell->hi.z = nhi; }
