@@ -409,11 +409,12 @@ sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err
 
     sg_aabb bounds = sg_aabb_empty();
     for (size_t i = 0; i < d->count; ++i) {
-        bounds = sg_aabb_grow(bounds, sg_v3(d->lo[0][i], d->lo[1][i], d->lo[2][i]));
-        bounds = sg_aabb_grow(bounds, sg_v3(d->hi[0][i], d->hi[1][i], d->hi[2][i]));
+        sg_vec3 lo = sg_v3(d->lo[0][i], d->lo[1][i], d->lo[2][i]), hi = sg_v3(d->hi[0][i], d->hi[1][i], d->hi[2][i]);
+        if (!sg_v3_isfinite(lo) || !sg_v3_isfinite(hi) || lo.x > hi.x || lo.y > hi.y || lo.z > hi.z)
+            return sg_error_set(err, SG_ERR_INVALID_ARG, "kd-tree: primitive %zu: box is not finite or inverted", i);
+        bounds = sg_aabb_grow(bounds, lo);
+        bounds = sg_aabb_grow(bounds, hi);
     }
-    if (!sg_v3_isfinite(bounds.lo) || !sg_v3_isfinite(bounds.hi))
-        return sg_error_set(err, SG_ERR_INVALID_ARG, "kd-tree: primitive boxes are not finite");
 
     uint32_t *all = sg_alloc_array(d->count, sizeof *all);
     bnode *root = new_bnode(&c, 0);
