@@ -145,6 +145,19 @@ static inline __m256 exp_m4_0(__m256 x)
     __m256i e = _mm256_slli_epi32(_mm256_cvtps_epi32(fl), 23);
     return _mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(p), e));
 }
+
+/* The kernel for 8 squared distance ratios s2 = (d / r)^2 (kernel_sq). */
+static inline __m256 kernel8(sg_kernel kernel, __m256 s2)
+{
+    const __m256 zero = _mm256_setzero_ps();
+    if (kernel == SG_KERNEL_GAUSSIAN) {
+        __m256 g = exp_m4_0(_mm256_max_ps(_mm256_mul_ps(s2, _mm256_set1_ps(-4.0f)), _mm256_set1_ps(-4.0f)));
+        return _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(g, _mm256_set1_ps(GAUSS_E4)),
+                                           _mm256_set1_ps(1.0f / (1.0f - GAUSS_E4))),
+                             zero);
+    }
+    return _mm256_max_ps(_mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_sqrt_ps(s2)), zero);
+}
 #endif
 
 /* F, W and the normal sum N at 8 parameters over the active splats (SIMD
@@ -153,20 +166,13 @@ static void eval_actives8(const actives *a, sg_kernel kernel, sg_vec3 d, const f
                           float W[8], float (*N)[8])
 {
 #ifdef SG_MLS_AVX2
-    const __m256 vt = _mm256_loadu_ps(t), zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 vt = _mm256_loadu_ps(t), zero = _mm256_setzero_ps();
     __m256 w_sum = zero, qx = zero, qy = zero, qz = zero, nx = zero, ny = zero, nz = zero;
-    const __m256 ge4 = _mm256_set1_ps(GAUSS_E4), gnorm = _mm256_set1_ps(1.0f / (1.0f - GAUSS_E4));
     for (int j = 0; j < a->n; ++j) {
         __m256 dt = _mm256_sub_ps(vt, _mm256_set1_ps(a->tc[j]));
         __m256 s2 = _mm256_mul_ps(_mm256_fmadd_ps(dt, dt, _mm256_set1_ps(a->perp2[j])),
                                   _mm256_set1_ps(a->inv_r2[j]));
-        __m256 w;
-        if (kernel == SG_KERNEL_GAUSSIAN) {
-            __m256 g = exp_m4_0(_mm256_max_ps(_mm256_mul_ps(s2, _mm256_set1_ps(-4.0f)), _mm256_set1_ps(-4.0f)));
-            w = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(g, ge4), gnorm), zero);
-        } else {
-            w = _mm256_max_ps(_mm256_sub_ps(one, _mm256_sqrt_ps(s2)), zero);
-        }
+        __m256 w = kernel8(kernel, s2);
         w_sum = _mm256_add_ps(w_sum, w);
         qx = _mm256_fmadd_ps(w, _mm256_set1_ps(a->qx[j]), qx);
         qy = _mm256_fmadd_ps(w, _mm256_set1_ps(a->qy[j]), qy);
@@ -534,9 +540,8 @@ static void plane_distance8(const shrink_splats *sp, sg_kernel kernel, const flo
 {
     float W[8], E[3][8], N[3][8];
 #ifdef SG_MLS_AVX2
-    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 zero = _mm256_setzero_ps();
     const __m256 x0 = _mm256_loadu_ps(x[0]), x1 = _mm256_loadu_ps(x[1]), x2 = _mm256_loadu_ps(x[2]);
-    const __m256 ge4 = _mm256_set1_ps(GAUSS_E4), gnorm = _mm256_set1_ps(1.0f / (1.0f - GAUSS_E4));
     __m256 ws = zero, ex = zero, ey = zero, ez = zero, nx = zero, ny = zero, nz = zero;
     for (size_t i = 0; i < sp->n; ++i) {
         __m256 dx = _mm256_sub_ps(x0, _mm256_set1_ps(sp->px[i]));
@@ -544,13 +549,7 @@ static void plane_distance8(const shrink_splats *sp, sg_kernel kernel, const flo
         __m256 dz = _mm256_sub_ps(x2, _mm256_set1_ps(sp->pz[i]));
         __m256 s2 = _mm256_mul_ps(_mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz))),
                                   _mm256_set1_ps(sp->inv_r2[i]));
-        __m256 w;
-        if (kernel == SG_KERNEL_GAUSSIAN) {
-            __m256 g = exp_m4_0(_mm256_max_ps(_mm256_mul_ps(s2, _mm256_set1_ps(-4.0f)), _mm256_set1_ps(-4.0f)));
-            w = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(g, ge4), gnorm), zero);
-        } else {
-            w = _mm256_max_ps(_mm256_sub_ps(one, _mm256_sqrt_ps(s2)), zero);
-        }
+        __m256 w = kernel8(kernel, s2);
         ws = _mm256_add_ps(ws, w);
         ex = _mm256_fmadd_ps(w, dx, ex);
         ey = _mm256_fmadd_ps(w, dy, ey);
