@@ -5,6 +5,14 @@
  * a ray leaving a surface outward sets SG_RAY_FRONT_ONLY, so the surface it
  * starts on (seen from behind, dot(dir, n) > 0) is ignored while a real
  * front-facing surface, however close (a corner), is hit.
+ *
+ * The facing test alone lets a ray leaving at a grazing angle (within about
+ * r/R of the tangent plane) re-enter the bumps of the surface it leaves.
+ * A spawned ray therefore also names that surface (self_n, self_r):
+ * crossings nearer than self_r whose normal lies within SG_SELF_COS of
+ * self_n are the same smooth patch and are ignored. A real occluder that
+ * close must turn by more than that angle within one splat radius (a
+ * corner or crease), and is still hit.
  */
 #ifndef SG_MATH_RAY_H
 #define SG_MATH_RAY_H
@@ -14,6 +22,9 @@
 #include "math/vec3.h"
 
 #define SG_INVALID_ID 0xFFFFFFFFu
+
+/* cos(25 degrees): normals closer than this belong to the ray's own patch. */
+#define SG_SELF_COS 0.9063078f
 
 enum sg_ray_flags {
     SG_RAY_ANY_FACE = 0,        /* accept the first surface crossing          */
@@ -27,7 +38,16 @@ typedef struct sg_ray {
     float tmin;     /* search interval [tmin, tmax] along dir             */
     float tmax;
     uint32_t flags; /* sg_ray_flags                                       */
+    sg_vec3 self_n; /* normal of the surface the ray leaves (spawned rays) */
+    float self_r;   /* its splat radius; 0: no self test (primary rays)    */
 } sg_ray;
+
+/* Whether a crossing at t with unit normal n is the ray's own surface. */
+static inline int sg_ray_is_self(const sg_ray *r, float t, sg_vec3 n)
+{
+    return r->self_r > 0.0f && t < r->self_r &&
+           n.x * r->self_n.x + n.y * r->self_n.y + n.z * r->self_n.z > SG_SELF_COS;
+}
 
 typedef struct sg_hit {
     float t;        /* distance along the ray                            */

@@ -84,7 +84,7 @@ static sg_vec3 shade_pixel(const frame *f, const sg_ray *ray, tile_stats *ts)
     sg_vec3 c = sg_v3_scale(sg_v3_mul(albedo, f->d.sky_color), f->d.ambient);
     float ndl = sg_v3_dot(n, l);
     if (ndl > 0.0f) {
-        sg_ray shadow = sg_scene_spawn_ray(&hit, l, INFINITY);
+        sg_ray shadow = sg_scene_spawn_ray(f->scene, &hit, l, INFINITY);
         ts->shadow_rays++;
         if (!sg_scene_occluded(f->scene, &shadow, &ts->shadow)) {
             /* r = reflect(-l, n); highlight from the angle between r and v. */

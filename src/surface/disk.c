@@ -47,6 +47,8 @@ static inline float disk_hit(const sg_splat_soa *s, size_t i, const sg_ray *ray,
     float d2 = ex * ex + ey * ey + ez * ez, r2 = s->r[i] * s->r[i];
     if (!(d2 < r2))
         return NAN;
+    if (sg_ray_is_self(ray, t, sg_v3(s->nx[i], s->ny[i], s->nz[i])))
+        return NAN;
     *w = 1.0f - sqrtf(d2) * s->inv_r[i];
     return t;
 }

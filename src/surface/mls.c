@@ -465,6 +465,16 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
                 continue;
             }
             int crossing = prev_ok && ((prevF > 0.0f && F <= 0.0f) || (prevF < 0.0f && F >= 0.0f));
+            if (crossing && ray->self_r > 0.0f) {
+                /* The ray's own surface (ray.h)? Judge by the linear root
+                 * and the interpolated normal sum. */
+                float u = prevF / (prevF - F);
+                sg_vec3 nn = sg_v3_normalize(sg_v3(prevN[0] + (Ns[0][j] - prevN[0]) * u,
+                                                   prevN[1] + (Ns[1][j] - prevN[1]) * u,
+                                                   prevN[2] + (Ns[2][j] - prevN[2]) * u));
+                if (sg_ray_is_self(ray, prevT + (ts[j] - prevT) * u, nn))
+                    crossing = 0;
+            }
             if (crossing && accept_crossing(ray->flags, prevF > 0.0f)) {
                 /* The paper interpolates linearly between the two samples.
                  * We first resample the bracket with 8 interior samples in

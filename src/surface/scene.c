@@ -185,10 +185,14 @@ const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
 
 void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
 
-sg_ray sg_scene_spawn_ray(const sg_hit *h, sg_vec3 dir, float tmax)
+sg_ray sg_scene_spawn_ray(const sg_scene *sc, const sg_hit *h, sg_vec3 dir, float tmax)
 {
     sg_ray r = {.org = h->p, .dir = dir, .tmin = 0.0f, .tmax = tmax};
     r.flags = sg_v3_dot(dir, h->n) >= 0.0f ? SG_RAY_FRONT_ONLY : SG_RAY_BACK_ONLY;
+    if (h->splat < sc->points.count) {
+        r.self_n = h->n;
+        r.self_r = sc->points.radius[h->splat];
+    }
     return r;
 }
 

@@ -101,8 +101,9 @@ const sg_pointset *sg_scene_points(const sg_scene *scene);
 void sg_scene_get_info(const sg_scene *scene, sg_scene_info *info);
 
 /* A ray that leaves hit h in direction dir (unit): origin at the hit, the
- * seamless front/back expectation set from the side dir points to, tmin 0,
- * tmax as given. Use for shadow and secondary rays. */
-sg_ray sg_scene_spawn_ray(const sg_hit *h, sg_vec3 dir, float tmax);
+ * seamless front/back expectation set from the side dir points to, the
+ * surface it leaves named (ray.h), tmin 0, tmax as given. Use for shadow
+ * and secondary rays. */
+sg_ray sg_scene_spawn_ray(const sg_scene *scene, const sg_hit *h, sg_vec3 dir, float tmax);
 
 #endif
