@@ -44,7 +44,9 @@ typedef enum sg_kernel {
 } sg_kernel;
 
 /* kd-tree refinements of Wald & Seidel 2005 §3.4, as flags to turn OFF, so
- * that a zeroed desc uses all of them. */
+ * that a zeroed desc uses all of them. Shrinking samples the MLS field, so
+ * it applies to SG_SURFACE_MLS only; encouraged splits only pay off when
+ * the small cells they make are shrunk, so they are used only with it. */
 enum sg_kd_disable {
     SG_KD_NO_SHRINK = 1u << 0,    /* §3.4.1 cell shrinking by sampled F      */
     SG_KD_NO_ENCOURAGE = 1u << 1, /* §3.4.2 encouraged splits E(n)           */
