@@ -1,0 +1,220 @@
+/* exr_read.cpp — sg_exr_read through OpenEXR's C++ library (Imf::InputFile,
+ * which reads scanline and tiled parts alike and decodes DWAA/DWAB).
+ *
+ * Invariants:
+ *  1. No exception crosses the extern "C" boundary: sg_exr_read's whole body
+ *     runs inside one try whose handlers map Iex::ErrnoExc -> SG_ERR_IO,
+ *     std::bad_alloc -> SG_ERR_NOMEM and every other exception ->
+ *     SG_ERR_CORRUPT, always with the path and the library's message.
+ *  2. The pixel array is owned by `img` until success hands it to *out; any
+ *     failure (status or exception) frees it (image_guard).
+ *  3. A file whose chunk table says pixels are missing (isComplete() false,
+ *     e.g. a truncated file) is rejected before decoding: OpenEXR would
+ *     otherwise fill the missing lines with the fill value or throw midway.
+ */
+#include "io/exr_read.h"
+
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+
+#include <ImfChannelList.h>
+#include <ImfCompression.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfRgbaFile.h>
+#include <ImfTestFile.h>
+#include <ImfArray.h>
+#include <Iex.h>
+
+extern "C" {
+#include "core/alloc.h"
+}
+
+namespace {
+
+/* Frees the image on every exit that did not hand it over (invariant 2). */
+struct image_guard {
+    sg_image img = {0, 0, nullptr};
+    ~image_guard() { sg_image_free(&img); }
+};
+
+const char *compression_name(Imf::Compression c)
+{
+    switch (c) {
+    case Imf::NO_COMPRESSION: return "none";
+    case Imf::RLE_COMPRESSION: return "rle";
+    case Imf::ZIPS_COMPRESSION: return "zips";
+    case Imf::ZIP_COMPRESSION: return "zip";
+    case Imf::PIZ_COMPRESSION: return "piz";
+    case Imf::PXR24_COMPRESSION: return "pxr24";
+    case Imf::B44_COMPRESSION: return "b44";
+    case Imf::B44A_COMPRESSION: return "b44a";
+    case Imf::DWAA_COMPRESSION: return "dwaa";
+    case Imf::DWAB_COMPRESSION: return "dwab";
+    default: return "?";
+    }
+}
+
+/* Luminance/chroma files: Imf::RgbaInputFile owns the chroma reconstruction
+ * (filtering of the subsampled RY/BY and the file's chromaticities). */
+void read_yc(const char *path, const Imath::Box2i &dw, sg_image *img)
+{
+    Imf::RgbaInputFile in(path);
+    const int64_t w = img->width, h = img->height;
+    Imf::Array2D<Imf::Rgba> px(h, w);
+    /* The library indexes base[y * yStride + x * xStride] with (x, y) in the
+     * data window; shift the base in integer arithmetic so no out-of-range
+     * pointer is ever formed by us. */
+    intptr_t base = reinterpret_cast<intptr_t>(&px[0][0]) -
+                    (static_cast<intptr_t>(dw.min.x) + static_cast<intptr_t>(dw.min.y) * w) *
+                        static_cast<intptr_t>(sizeof(Imf::Rgba));
+    in.setFrameBuffer(reinterpret_cast<Imf::Rgba *>(base), 1, static_cast<size_t>(w));
+    in.readPixels(dw.min.y, dw.max.y);
+    for (int64_t y = 0; y < h; y++)
+        for (int64_t x = 0; x < w; x++) {
+            float *p = img->data + 3 * (y * w + x);
+            p[0] = px[y][x].r;
+            p[1] = px[y][x].g;
+            p[2] = px[y][x].b;
+        }
+}
+
+sg_status read_exr(const char *path, sg_image *out, sg_exr_read_info *info, sg_error *err)
+{
+    /* OpenEXR's own open failure reports errno only through an exception
+     * whose text varies; an fopen first gives the plain OS reason. */
+    FILE *probe = std::fopen(path, "rb");
+    if (!probe)
+        return sg_error_set(err, SG_ERR_IO, "%s: cannot open: %s", path, std::strerror(errno));
+    std::fclose(probe);
+
+    bool tiled = false, deep = false, multipart = false;
+    if (!Imf::isOpenExrFile(path, tiled, deep, multipart))
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: not an OpenEXR file (bad magic or version)",
+                            path);
+    if (deep)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: deep OpenEXR files are not read", path);
+
+    Imf::InputFile in(path);
+    const Imf::Header &hdr = in.header();
+    const Imath::Box2i dw = hdr.dataWindow();
+    const int64_t w = static_cast<int64_t>(dw.max.x) - dw.min.x + 1;
+    const int64_t h = static_cast<int64_t>(dw.max.y) - dw.min.y + 1;
+    if (w <= 0 || h <= 0 || w > SG_IMAGE_MAX_DIM || h > SG_IMAGE_MAX_DIM)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: data window %lldx%lld is out of range (1..%d)",
+                            path, static_cast<long long>(w), static_cast<long long>(h),
+                            SG_IMAGE_MAX_DIM);
+    if (!in.isComplete()) /* invariant 3 */
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: truncated: pixel chunks are missing", path);
+
+    const Imf::ChannelList &chl = hdr.channels();
+    static const char *const rgb_names[3] = {"R", "G", "B"};
+    const Imf::Channel *rgb[3];
+    int n_rgb = 0;
+    for (int c = 0; c < 3; c++) {
+        rgb[c] = chl.findChannel(rgb_names[c]);
+        if (rgb[c]) {
+            n_rgb++;
+            if (rgb[c]->xSampling != 1 || rgb[c]->ySampling != 1)
+                return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: channel %s is subsampled (%dx%d)",
+                                    path, rgb_names[c], rgb[c]->xSampling, rgb[c]->ySampling);
+        }
+    }
+    const Imf::Channel *ych = chl.findChannel("Y");
+    const bool chroma = chl.findChannel("RY") && chl.findChannel("BY");
+    sg_exr_source source;
+    if (n_rgb > 0)
+        source = SG_EXR_SOURCE_RGB;
+    else if (ych && chroma)
+        source = SG_EXR_SOURCE_YC;
+    else if (ych)
+        source = SG_EXR_SOURCE_Y;
+    else {
+        std::string names;
+        int listed = 0;
+        for (Imf::ChannelList::ConstIterator it = chl.begin(); it != chl.end(); ++it, ++listed) {
+            if (listed == 4) {
+                names += ", ...";
+                break;
+            }
+            names += std::string(listed ? ", " : "") + it.name();
+        }
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: no R, G, B or Y channel (channels: %s)", path,
+                            names.empty() ? "none" : names.c_str());
+    }
+    if (source == SG_EXR_SOURCE_Y && (ych->xSampling != 1 || ych->ySampling != 1))
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: channel Y is subsampled (%dx%d)", path,
+                            ych->xSampling, ych->ySampling);
+
+    image_guard g;
+    if (sg_image_alloc(&g.img, static_cast<int>(w), static_cast<int>(h), nullptr) != SG_OK)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %lldx%lld pixels", path,
+                            static_cast<long long>(w), static_cast<long long>(h));
+
+    bool half = true;
+    if (source == SG_EXR_SOURCE_YC) {
+        read_yc(path, dw, &g.img);
+        half = ych->type == Imf::HALF;
+    } else {
+        /* Every slice is FLOAT: the library converts half and uint. A slice
+         * whose channel is absent is filled with 0 (the fill value). */
+        const size_t xs = 3 * sizeof(float), ys = xs * static_cast<size_t>(w);
+        Imf::FrameBuffer fb;
+        if (source == SG_EXR_SOURCE_RGB) {
+            for (int c = 0; c < 3; c++) {
+                fb.insert(rgb_names[c], Imf::Slice::Make(Imf::FLOAT, g.img.data + c, dw, xs, ys));
+                if (rgb[c] && rgb[c]->type != Imf::HALF)
+                    half = false;
+            }
+        } else {
+            fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, g.img.data, dw, xs, ys));
+            half = ych->type == Imf::HALF;
+        }
+        in.setFrameBuffer(fb);
+        in.readPixels(dw.min.y, dw.max.y);
+        if (source == SG_EXR_SOURCE_Y) {
+            const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+            for (size_t i = 0; i < n; i++)
+                g.img.data[3 * i + 1] = g.img.data[3 * i + 2] = g.img.data[3 * i];
+        }
+    }
+
+    if (info) {
+        info->tiled = hdr.hasTileDescription() ? 1 : 0;
+        info->half = half ? 1 : 0;
+        info->has_alpha = chl.findChannel("A") ? 1 : 0;
+        info->source = source;
+        std::snprintf(info->compression, sizeof info->compression, "%s",
+                      compression_name(hdr.compression()));
+    }
+    *out = g.img; /* invariant 2: ownership moves to the caller */
+    g.img = sg_image{0, 0, nullptr};
+    return SG_OK;
+}
+
+} // namespace
+
+extern "C" sg_status sg_exr_read(const char *path, sg_image *out, sg_exr_read_info *info, sg_error *err)
+{
+    if (!out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_exr_read: out is NULL");
+    if (!path || !path[0])
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "EXR path is empty");
+    try { /* invariant 1 */
+        return read_exr(path, out, info, err);
+    } catch (const Iex::ErrnoExc &e) {
+        return sg_error_set(err, SG_ERR_IO, "%s: %s", path, e.what());
+    } catch (const std::bad_alloc &) {
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory while decoding", path);
+    } catch (const std::exception &e) {
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: %s", path, e.what());
+    } catch (...) {
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: unknown error while decoding", path);
+    }
+}
