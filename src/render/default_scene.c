@@ -21,14 +21,13 @@
 #include "io/mesh.h"
 #include "math/rng.h"
 #include "points/normals.h"
+#include "points/primitives.h"
 #include "points/radius.h"
 #include "points/sample.h"
 
-#define PI_F 3.14159265358979323846f
 
 /* Seed offset of the ground jitter, so it never shares a stream with the
  * mesh samples of the same seed. */
-#define GROUND_STREAM 0x67726f756e64ull /* "ground" */
 
 static sg_model_points_desc model_defaults(const sg_model_points_desc *d)
 {
@@ -120,34 +119,6 @@ sg_status sg_model_points_load(const char *path, const sg_model_points_desc *d, 
     return st;
 }
 
-/* The ground: side x side jittered-grid points over centre +- half at
- * height y (header: radius rule). */
-static sg_status make_ground(int side, float half, sg_vec3 centre, const sg_model_points_desc *md,
-                             sg_pointset *out, sg_error *err)
-{
-    size_t n = (size_t)side * (size_t)side;
-    sg_pointset g = {0};
-    sg_status st = sg_pointset_alloc(&g, n, err);
-    if (st != SG_OK)
-        return st;
-    float spacing = 2.0f * half / (float)side;
-    float radius = md->radius_scale * spacing * sqrtf((float)md->radius_k / PI_F);
-    uint64_t seed = md->seed ^ GROUND_STREAM;
-    for (size_t j = 0; j < n; j++) {
-        float gx = (float)(j % (size_t)side), gz = (float)(j / (size_t)side);
-        g.px[j] = centre.x - half + spacing * (gx + sg_rng_float(seed, j, 0, 0));
-        g.py[j] = centre.y;
-        g.pz[j] = centre.z - half + spacing * (gz + sg_rng_float(seed, j, 0, 1));
-        g.nx[j] = 0.0f;
-        g.ny[j] = 1.0f;
-        g.nz[j] = 0.0f;
-        g.radius[j] = radius;
-        g.ar[j] = g.ag[j] = g.ab[j] = 0.55f;
-    }
-    *out = g;
-    return SG_OK;
-}
-
 sg_status sg_default_scene_load(const sg_default_scene_desc *d, sg_default_scene *out, sg_error *err)
 {
     sg_default_scene_desc dd = d ? *d : (sg_default_scene_desc){0};
@@ -185,7 +156,9 @@ sg_status sg_default_scene_load(const sg_default_scene_desc *d, sg_default_scene
         goto done;
     sg_aabb box = sg_pointset_bounds(&bunny);
     sg_vec3 centre = sg_v3(0.5f * (box.lo.x + box.hi.x), ground_y, 0.5f * (box.lo.z + box.hi.z));
-    st = make_ground(dd.ground_side, dd.ground_half, centre, &md, &ground, err);
+    sg_plane_points_desc pd = {.side = dd.ground_side, .half = dd.ground_half, .centre = centre,
+                               .radius_k = md.radius_k, .radius_scale = md.radius_scale, .seed = md.seed};
+    st = sg_points_make_plane(&pd, &ground, err);
     if (st != SG_OK)
         goto done;
     st = sg_pointset_append(&all, &bunny, err);

@@ -1,0 +1,194 @@
+/* world.c — models, materials and the envmap of a scene file. See world.h.
+ *
+ * Invariants:
+ *  1. scenes[i] and materials[i] belong to scene-file model i;
+ *  2. the nearest hit over models is found by shrinking the ray's tmax to
+ *     the best hit so far, so each later model only reports nearer hits.
+ */
+#include "render/world.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "envmap/analytic.h"
+#include "points/primitives.h"
+#include "render/default_scene.h"
+
+struct sg_world {
+    size_t count;            /* models                              */
+    sg_scene **scenes;       /* one kd-tree per model (invariant 1) */
+    sg_material *materials;  /* one material per model             */
+    sg_envmap *env;
+    sg_aabb bounds;
+};
+
+static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_pointset *out, sg_error *err)
+{
+    sg_status st;
+    switch (m->kind) {
+    case SG_SCENE_MODEL_FILE:
+        st = sg_model_points_load(m->path, &m->points, out, err);
+        break;
+    case SG_SCENE_MODEL_BUNNY: {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/bunny.ply", SG_ASSET_DIR);
+        st = sg_model_points_load(path, &m->points, out, err);
+        break;
+    }
+    case SG_SCENE_MODEL_GROUND: {
+        sg_plane_points_desc d = {.radius_k = m->points.radius_k, .radius_scale = m->points.radius_scale};
+        st = sg_points_make_plane(&d, out, err);
+        break;
+    }
+    case SG_SCENE_MODEL_SPHERE: {
+        sg_sphere_points_desc d = {.count = m->points.points, .radius_k = m->points.radius_k,
+                                   .radius_scale = m->points.radius_scale};
+        st = sg_points_make_sphere(&d, out, err);
+        break;
+    }
+    default:
+        st = sg_error_set(err, SG_ERR_INVALID_ARG, "$.models[%zu]: unknown model kind %d", index, (int)m->kind);
+    }
+    return st;
+}
+
+static void transform_points(const sg_scene_transform *t, sg_pointset *ps)
+{
+    for (size_t i = 0; i < ps->count; ++i) {
+        sg_vec3 p = sg_scene_transform_point(t, sg_pointset_position(ps, i));
+        sg_vec3 n = sg_scene_transform_normal(t, sg_pointset_normal(ps, i));
+        ps->px[i] = p.x; ps->py[i] = p.y; ps->pz[i] = p.z;
+        ps->nx[i] = n.x; ps->ny[i] = n.y; ps->nz[i] = n.z;
+        ps->radius[i] = sg_scene_transform_radius(t, ps->radius[i]);
+    }
+}
+
+static sg_status make_envmap(const sg_scene_env *e, sg_envmap **out, sg_error *err)
+{
+    sg_envmap_desc d = {.rotation_deg = e->rotation_deg, .intensity = e->intensity};
+    sg_image img = {0};
+    sg_status st = SG_OK;
+    if (e->kind == SG_SCENE_ENV_FILE) {
+        d.path = e->path;
+    } else {
+        sg_analytic_desc a = {.radiance = e->radiance};
+        switch (e->kind) {
+        case SG_SCENE_ENV_UNIFORM: a.type = SG_ANALYTIC_UNIFORM; a.width = 8; a.height = 4; break;
+        case SG_SCENE_ENV_SKY: a.type = SG_ANALYTIC_SKY; break;
+        case SG_SCENE_ENV_SUNSKY: a.type = SG_ANALYTIC_SUNSKY; break;
+        case SG_SCENE_ENV_STUDIO: a.type = SG_ANALYTIC_STUDIO; break;
+        default: return sg_error_set(err, SG_ERR_INVALID_ARG, "$.envmap: unknown kind %d", (int)e->kind);
+        }
+        if ((st = sg_analytic_make(&a, &img, err)) != SG_OK)
+            return st;
+        d.image = &img;
+    }
+    /* A zero intensity in the desc means 1; the scene file's 0 means dark. */
+    if (e->intensity == 0.0f)
+        d.intensity = 1e-30f;
+    st = sg_envmap_create(&d, out, err);
+    sg_image_free(&img);
+    return st;
+}
+
+sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err)
+{
+    if (!sf || !out || sf->model_count == 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "world: no models");
+    sg_world *w = sg_calloc_array(1, sizeof *w);
+    if (!w)
+        return sg_error_set(err, SG_ERR_NOMEM, "world: out of memory");
+    sg_status st = SG_OK;
+    w->scenes = sg_calloc_array(sf->model_count, sizeof *w->scenes);
+    w->materials = sg_calloc_array(sf->model_count, sizeof *w->materials);
+    if (!w->scenes || !w->materials) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "world: out of memory for %zu models", sf->model_count);
+        goto fail;
+    }
+    w->count = sf->model_count;
+    w->bounds = sg_aabb_empty();
+    for (size_t i = 0; i < sf->model_count; ++i) {
+        const sg_scene_model *m = &sf->models[i];
+        sg_pointset ps = {0};
+        if ((st = load_model_points(m, i, &ps, err)) != SG_OK)
+            goto fail;
+        transform_points(&m->transform, &ps);
+        st = sg_scene_create(&m->surface, &ps, &w->scenes[i], err);
+        sg_pointset_free(&ps);
+        if (st != SG_OK)
+            goto fail;
+        w->materials[i] = m->material;
+        sg_scene_info info;
+        sg_scene_get_info(w->scenes[i], &info);
+        w->bounds = sg_aabb_union(w->bounds, info.bounds);
+    }
+    if ((st = make_envmap(&sf->env, &w->env, err)) != SG_OK)
+        goto fail;
+    *out = w;
+    return SG_OK;
+fail:
+    sg_world_destroy(w);
+    return st;
+}
+
+void sg_world_destroy(sg_world *w)
+{
+    if (!w)
+        return;
+    for (size_t i = 0; w->scenes && i < w->count; ++i)
+        sg_scene_destroy(w->scenes[i]);
+    sg_free(w->scenes);
+    sg_free(w->materials);
+    sg_envmap_destroy(w->env);
+    sg_free(w);
+}
+
+int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats)
+{
+    sg_ray r = *ray;
+    int found = 0;
+    for (size_t i = 0; i < w->count; ++i) {
+        sg_hit hit;
+        if (sg_scene_intersect(w->scenes[i], &r, &hit, stats)) {
+            h->hit = hit;
+            h->model = (uint32_t)i;
+            r.tmax = hit.t; /* invariant 2 */
+            found = 1;
+        }
+    }
+    if (!found) {
+        h->hit.splat = SG_INVALID_ID;
+        h->model = 0;
+    }
+    return found;
+}
+
+int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats)
+{
+    for (size_t i = 0; i < w->count; ++i)
+        if (sg_scene_occluded(w->scenes[i], ray, stats))
+            return 1;
+    return 0;
+}
+
+sg_ray sg_world_spawn_ray(const sg_world *w, const sg_world_hit *h, sg_vec3 dir, float tmax)
+{
+    return sg_scene_spawn_ray(w->scenes[h->model], &h->hit, dir, tmax);
+}
+
+const sg_material *sg_world_material(const sg_world *w, uint32_t model) { return &w->materials[model]; }
+
+sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h)
+{
+    const sg_pointset *ps = sg_scene_points(w->scenes[h->model]);
+    uint32_t i = h->hit.splat;
+    sg_vec3 point = i < ps->count ? sg_v3(ps->ar[i], ps->ag[i], ps->ab[i]) : sg_v3(1, 1, 1);
+    return sg_material_albedo(&w->materials[h->model], point);
+}
+
+const sg_envmap *sg_world_envmap(const sg_world *w) { return w->env; }
+size_t sg_world_model_count(const sg_world *w) { return w->count; }
+const sg_scene *sg_world_scene(const sg_world *w, uint32_t model) { return w->scenes[model]; }
+sg_aabb sg_world_bounds(const sg_world *w) { return w->bounds; }

@@ -1,0 +1,68 @@
+/* world.h — everything a renderer traces: the models of a scene file, each
+ * with its own surface (sg_scene) and material, and the environment map.
+ *
+ * What it does: turns a parsed scene file (io/scene_file.h) into ray
+ * queries over all models (nearest hit over every model's kd-tree), the
+ * material and albedo at a hit, and the envmap. The bake, the reference
+ * path tracer and the viewer share it: one way to load, one way to
+ * intersect (DESIGN.md).
+ * What it does not do: shading or sampling decisions.
+ *
+ * Builtin models: "bunny" (assets/bunny.ply sampled like any mesh: about
+ * 10 units tall, standing on y = 0), "ground" (a 30 x 30 square of splats at
+ * y = 0, normal +Y), "sphere" (unit sphere, outward normals, 100k points or
+ * the model's "points"); each then goes through its transform.
+ *
+ * Ownership: the world copies what it needs; the scene file may be freed
+ * after sg_world_create. Queries are thread-safe; stats must be per thread.
+ */
+#ifndef SG_RENDER_WORLD_H
+#define SG_RENDER_WORLD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/error.h"
+#include "envmap/envmap.h"
+#include "io/scene_file.h"
+#include "material/bsdf.h"
+#include "surface/scene.h"
+
+typedef struct sg_world sg_world; /* opaque */
+
+typedef struct sg_world_hit {
+    sg_hit hit;      /* as sg_scene_intersect; hit.splat indexes the model */
+    uint32_t model;  /* index into the scene file's models                 */
+} sg_world_hit;
+
+/* Loads every model (building its kd-tree) and the envmap. On failure
+ * *out is untouched and err names the model ("$.models[1]: ...") or file. */
+sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err);
+
+/* NULL is a no-op. */
+void sg_world_destroy(sg_world *w);
+
+/* Nearest hit over all models in [tmin, tmax]; 0 on a miss. */
+int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats);
+
+/* 1 if any model is hit in [tmin, tmax]. */
+int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats);
+
+/* A secondary ray leaving h towards dir (sg_scene_spawn_ray of its model). */
+sg_ray sg_world_spawn_ray(const sg_world *w, const sg_world_hit *h, sg_vec3 dir, float tmax);
+
+const sg_material *sg_world_material(const sg_world *w, uint32_t model);
+
+/* Diffuse albedo at the hit: the material's albedo times the splat's
+ * colour where the material uses point colours (sg_material_albedo). */
+sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h);
+
+const sg_envmap *sg_world_envmap(const sg_world *w);
+
+size_t sg_world_model_count(const sg_world *w);
+const sg_scene *sg_world_scene(const sg_world *w, uint32_t model);
+
+/* Box of all models' supports, and its diagonal (the scene's unit length). */
+sg_aabb sg_world_bounds(const sg_world *w);
+
+#endif

@@ -1,0 +1,301 @@
+/* test_pathtrace.c — energy tests of the reference path tracer: furnaces,
+ * a convex sphere, an emitting room, a real HDR map against numerical
+ * integration, determinism and the 1/N variance law.
+ *
+ * Statistical tolerances. An image mean over P pixels, each the mean of N
+ * independent paths, has standard error sqrt(sum_i se_i^2) / P with se_i the
+ * per-pixel standard error the renderer reports (pixels are independent).
+ * A test passes when |mean - expected| <= 4 such errors: a false failure
+ * has probability below 1e-4 (normal tail); expected values are exact
+ * except where noted. */
+#include "test_support.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ref/pathtrace.h"
+#include "render/world.h"
+
+static const float PI = 3.14159265358979f;
+
+static sg_world *world_from_json(const char *json)
+{
+    sg_scene_file sf;
+    sg_error err = {0};
+    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
+        fail_msg("scene: %s", err.message);
+    sg_world *w = NULL;
+    if (sg_world_create(&sf, &w, &err) != SG_OK)
+        fail_msg("world: %s", err.message);
+    sg_scene_file_free(&sf);
+    return w;
+}
+
+static sg_ref_desc desc_look(sg_vec3 eye, sg_vec3 look, float fov, int size, int spp, int max_depth)
+{
+    sg_ref_desc d = {.width = size, .height = size, .spp = spp, .max_depth = max_depth, .seed = 7};
+    if (sg_camera_look_at(eye, look, sg_v3(0, 1, 0), fov, 1.0f, &d.camera, NULL) != SG_OK)
+        fail_msg("camera");
+    return d;
+}
+
+/* Image mean of channel c and its standard error (header comment). */
+static void image_mean(const sg_ref_result *r, int c, double *mean, double *se)
+{
+    size_t n = (size_t)r->mean.width * (size_t)r->mean.height;
+    double s = 0, v = 0;
+    for (size_t i = 0; i < n; ++i) {
+        s += r->mean.data[3 * i + c];
+        v += (double)r->std_error.data[3 * i + c] * r->std_error.data[3 * i + c];
+    }
+    *mean = s / (double)n;
+    *se = sqrt(v) / (double)n;
+}
+
+static void expect_image_mean(const sg_ref_result *r, double expected, const char *what)
+{
+    for (int c = 0; c < 3; ++c) {
+        double m, se;
+        image_mean(r, c, &m, &se);
+        if (!(fabs(m - expected) <= 4.0 * se + 1e-6 * expected))
+            fail_msg("%s: channel %d mean %.6f, expected %.6f (4 standard errors = %.2g)", what, c, m, expected,
+                     4.0 * se);
+    }
+}
+
+/* White furnace: surfaces of albedo 1 in a uniform environment L neither
+ * absorb nor emit, so every pixel sees L — through any number of bounces,
+ * for a convex sphere and for the sphere standing on a plane alike. */
+static void check_furnace(const char *model)
+{
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,\"transform\":{\"translate\":[0,1,0]},"
+             "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false},\"surface\":{\"model\":\"%s\"}},"
+             "{\"builtin\":\"ground\",\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false},"
+             "\"surface\":{\"model\":\"%s\"}}],"
+             "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}",
+             model, model);
+    sg_world *w = world_from_json(json);
+    sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 16, 1024);
+    sg_ref_result r;
+    assert_int_equal(sg_ref_render(w, &d, &r, NULL), SG_OK);
+    expect_image_mean(&r, 0.7, model);
+    sg_ref_result_free(&r);
+    sg_world_destroy(w);
+}
+static void test_ref_white_furnace_mls(void **state) { (void)state; check_furnace("mls"); }
+static void test_ref_white_furnace_disk(void **state) { (void)state; check_furnace("disk"); }
+
+/* A convex sphere of albedo rho in a uniform environment L: every ray that
+ * leaves it reaches the environment, so it renders rho L. The camera is
+ * close enough that the sphere fills the frame. */
+static void test_ref_convex_sphere_albedo(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
+                                  "\"material\":{\"albedo\":[0.5,0.25,0.8],\"use_point_colors\":false}}],"
+                                  "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[2,2,2]}}");
+    sg_ref_desc d = desc_look(sg_v3(0, 0, 3.0f), sg_v3(0, 0, 0), 12.0f, 16, 16, 8);
+    sg_ref_result r;
+    assert_int_equal(sg_ref_render(w, &d, &r, NULL), SG_OK);
+    const double expected[3] = {1.0, 0.5, 1.6};
+    for (int c = 0; c < 3; ++c) {
+        double m, se;
+        image_mean(&r, c, &m, &se);
+        if (!(fabs(m - expected[c]) <= 4.0 * se + 1e-6))
+            fail_msg("channel %d: mean %.6f, expected rho L = %.6f (4 se = %.2g)", c, m, expected[c], 4.0 * se);
+    }
+    sg_ref_result_free(&r);
+    sg_world_destroy(w);
+}
+
+/* Inside a closed sphere whose surface has albedo rho and emits Le, the
+ * radiance is the whole series Le (1 + rho + rho^2 + ...) = Le / (1 - rho):
+ * the test fails if bounces are cut, double-counted or lose energy. */
+static void test_ref_emitting_room(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
+                                  "\"material\":{\"albedo\":[0.5,0.5,0.5],\"use_point_colors\":false,"
+                                  "\"emission\":[1,1,1]}}],"
+                                  "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0,0,0]}}");
+    sg_ref_desc d = desc_look(sg_v3(0.1f, -0.2f, 0.3f), sg_v3(1, 0, 0), 60.0f, 16, 32, 1024);
+    sg_ref_result r;
+    assert_int_equal(sg_ref_render(w, &d, &r, NULL), SG_OK);
+    expect_image_mean(&r, 2.0, "emitting room, rho 0.5, Le 1");
+    sg_ref_result_free(&r);
+    sg_world_destroy(w);
+}
+
+/* A diffuse convex sphere under a real HDR map: the radiance at a point of
+ * normal n is rho / pi * E(n), E the map's irradiance integrated
+ * numerically (sg_envmap_irradiance). Paths through one fixed image point
+ * (no pixel jitter), mean of N against that within 4 sigma / sqrt(N),
+ * sigma from the same paths. */
+static void test_ref_diffuse_sphere_under_hdr_map(void **state)
+{
+    (void)state;
+    const char *map = sg_test_shared_data("envmaps/blender_studiolights/courtyard.exr");
+    if (!map)
+        skip();
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"models\":[{\"builtin\":\"sphere\",\"points\":60000,"
+             "\"material\":{\"albedo\":[0.6,0.6,0.6],\"use_point_colors\":false}}],"
+             "\"envmap\":{\"path\":\"%s\",\"rotation_deg\":30}}",
+             map);
+    sg_world *w = world_from_json(json);
+    sg_ref_desc d = desc_look(sg_v3(0, 0, 3.0f), sg_v3(0, 0, 0), 40.0f, 64, 1, 8);
+    d.seed = 3;
+    const float pts[3][2] = {{32.0f, 32.0f}, {22.0f, 26.0f}, {40.0f, 41.0f}};
+    for (int k = 0; k < 3; ++k) {
+        sg_ray ray = sg_camera_ray(&d.camera, pts[k][0], pts[k][1], d.width, d.height);
+        sg_world_hit h;
+        assert_true(sg_world_intersect(w, &ray, &h, NULL));
+        sg_vec3 E = sg_envmap_irradiance(sg_world_envmap(w), h.hit.n);
+        const int N = 4000;
+        double s[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
+        for (int i = 0; i < N; ++i) {
+            sg_vec3 L = sg_ref_path(w, &d, pts[k][0], pts[k][1], (uint64_t)i, NULL);
+            double v[3] = {L.x, L.y, L.z};
+            for (int c = 0; c < 3; ++c) {
+                s[c] += v[c];
+                s2[c] += v[c] * v[c];
+            }
+        }
+        double e[3] = {E.x, E.y, E.z};
+        for (int c = 0; c < 3; ++c) {
+            double mean = s[c] / N, sigma = sqrt(fmax(0.0, s2[c] / N - mean * mean));
+            double expected = 0.6 / PI * e[c];
+            /* + 1e-3 relative: the quadrature error bound of
+             * sg_envmap_irradiance; the hit normal of the sampled sphere
+             * is within ~1e-3 rad of the true one. */
+            if (!(fabs(mean - expected) <= 4.0 * sigma / sqrt((double)N) + 2e-3 * expected))
+                fail_msg("point %d channel %d: path mean %.5f, rho/pi E(n) = %.5f (4 sigma/sqrt(N) = %.2g)", k, c,
+                         mean, expected, 4.0 * sigma / sqrt((double)N));
+        }
+    }
+    sg_world_destroy(w);
+}
+
+/* The same seed gives the same bits on 1 and 2 threads. */
+static void test_ref_deterministic_across_threads(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+                                  "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
+                                  "\"envmap\":{\"builtin\":\"sky\"}}");
+    sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 4, 6);
+    sg_ref_result a, b;
+    d.threads = 1;
+    assert_int_equal(sg_ref_render(w, &d, &a, NULL), SG_OK);
+    d.threads = 2;
+    assert_int_equal(sg_ref_render(w, &d, &b, NULL), SG_OK);
+    assert_memory_equal(a.mean.data, b.mean.data, sizeof(float) * 3 * 24 * 24);
+    assert_memory_equal(a.std_error.data, b.std_error.data, sizeof(float) * 3 * 24 * 24);
+    sg_ref_result_free(&a);
+    sg_ref_result_free(&b);
+    sg_world_destroy(w);
+}
+
+/* The estimator's variance falls as 1/N: the image-averaged squared
+ * standard error at N = 4, 16, 64 paths per pixel lies on a log-log line
+ * of slope -1 (least squares; +-0.15 covers the scatter of the variance
+ * estimates themselves at these N over 576 pixels). */
+static void test_ref_variance_falls_as_one_over_n(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+                                  "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
+                                  "\"envmap\":{\"builtin\":\"sky\"}}");
+    const int ns[3] = {4, 16, 64};
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+        sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, ns[k], 6);
+        sg_ref_result r;
+        assert_int_equal(sg_ref_render(w, &d, &r, NULL), SG_OK);
+        double v = 0;
+        size_t n = 24 * 24;
+        for (size_t i = 0; i < 3 * n; ++i)
+            v += (double)r.std_error.data[i] * r.std_error.data[i];
+        x[k] = log((double)ns[k]);
+        y[k] = log(v / (double)(3 * n));
+        sg_ref_result_free(&r);
+    }
+    double mx = (x[0] + x[1] + x[2]) / 3, my = (y[0] + y[1] + y[2]) / 3, sxy = 0, sxx = 0;
+    for (int k = 0; k < 3; ++k) {
+        sxy += (x[k] - mx) * (y[k] - my);
+        sxx += (x[k] - mx) * (x[k] - mx);
+    }
+    double slope = sxy / sxx;
+    if (!(fabs(slope + 1.0) <= 0.15))
+        fail_msg("log-log slope of variance against N is %.3f, expected -1", slope);
+    sg_world_destroy(w);
+}
+
+/* Per-pixel test in the manner of Mitsuba 3's render tests: a short render
+ * (64 paths) against an independent long one (1024 paths, another seed) of
+ * the sphere on the ground under the sky map. Per pixel and channel
+ * z = (a - b) / sqrt(se_a^2 + se_b^2); with 3 P tests at family level
+ * alpha = 0.01, Sidak gives each alpha' = 1 - (1 - alpha)^(1 / 3P) and the
+ * two-sided threshold z* = Phi^-1(1 - alpha' / 2). Pixels whose paths all
+ * returned the same value (se = 0 in both) must agree exactly. Passes when
+ * at least 99.75% of the tests pass (heavy-tailed pixels, e.g. a few
+ * paths finding a bright spot, may fail the normal approximation). */
+static double inverse_normal_tail(double p) /* z with P(Z > z) = p, by bisection */
+{
+    double lo = 0.0, hi = 40.0;
+    for (int i = 0; i < 200; ++i) {
+        double mid = 0.5 * (lo + hi);
+        if (0.5 * erfc(mid / sqrt(2.0)) > p)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+static void test_ref_per_pixel_z_test(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+                                  "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
+                                  "\"envmap\":{\"builtin\":\"sky\"}}");
+    sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 64, 8);
+    sg_ref_result a, b;
+    assert_int_equal(sg_ref_render(w, &d, &a, NULL), SG_OK);
+    d.spp = 1024;
+    d.seed = 99;
+    assert_int_equal(sg_ref_render(w, &d, &b, NULL), SG_OK);
+    size_t tests = (size_t)3 * 24 * 24, passed = 0;
+    double alpha_each = 1.0 - pow(1.0 - 0.01, 1.0 / (double)tests);
+    double zstar = inverse_normal_tail(alpha_each / 2.0);
+    for (size_t i = 0; i < tests; ++i) {
+        double sa = a.std_error.data[i], sb = b.std_error.data[i];
+        double diff = (double)a.mean.data[i] - (double)b.mean.data[i];
+        double s = sqrt(sa * sa + sb * sb);
+        passed += s > 0.0 ? fabs(diff) / s <= zstar : diff == 0.0;
+    }
+    if ((double)passed < 0.9975 * (double)tests)
+        fail_msg("%zu of %zu pixel-channel z-tests passed (z* = %.3f); need 99.75%%", passed, tests, zstar);
+    sg_ref_result_free(&a);
+    sg_ref_result_free(&b);
+    sg_world_destroy(w);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ref_white_furnace_mls),
+        cmocka_unit_test(test_ref_white_furnace_disk),
+        cmocka_unit_test(test_ref_convex_sphere_albedo),
+        cmocka_unit_test(test_ref_emitting_room),
+        cmocka_unit_test(test_ref_diffuse_sphere_under_hdr_map),
+        cmocka_unit_test(test_ref_deterministic_across_threads),
+        cmocka_unit_test(test_ref_variance_falls_as_one_over_n),
+        cmocka_unit_test(test_ref_per_pixel_z_test),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

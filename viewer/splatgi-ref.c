@@ -1,0 +1,197 @@
+/* splatgi-ref — the Monte Carlo reference renderer: reads a scene file,
+ * path traces one camera's view and writes the mean image (EXR), its
+ * per-pixel standard error (EXR) and a JSON summary. Options, library calls
+ * and a report; the estimator lives in src/ref/pathtrace.c.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "io/image.h"
+#include "io/scene_file.h"
+#include "ref/pathtrace.h"
+#include "render/world.h"
+
+static const char usage[] =
+    "usage: splatgi-ref SCENE.json [options]\n"
+    "Unbiased path tracing of a scene file (the reference the bake is judged by).\n"
+    "  --camera NAME     camera of the scene file (default: its first; none:\n"
+    "                    the models framed from the front, above)\n"
+    "  --spp N           paths per pixel (default: the file's render.spp)\n"
+    "  --max-depth N     scattering events per path (default: render.max_depth)\n"
+    "  --width W --height H   image size (default: the file's)\n"
+    "  --seed S --threads N\n"
+    "  --out FILE.exr    mean radiance (default out/ref.exr); beside it\n"
+    "                    FILE.stderr.exr (standard error) and FILE.json (summary)\n"
+    "  --help\n";
+
+static int fail(const char *msg)
+{
+    fprintf(stderr, "splatgi-ref: %s\n", msg);
+    return 1;
+}
+
+static int parse_int(const char *opt, const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s ? s : "", &end, 10);
+    if (!s || errno || *end || end == s || v < lo || v > hi) {
+        fprintf(stderr, "splatgi-ref: %s: '%s' is not an integer in [%ld, %ld]\n", opt, s ? s : "", lo, hi);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+/* FILE.exr -> FILE<suffix> */
+static void sibling(const char *out, const char *suffix, char *buf, size_t size)
+{
+    size_t n = strlen(out);
+    if (n > 4 && strcmp(out + n - 4, ".exr") == 0)
+        n -= 4;
+    snprintf(buf, size, "%.*s%s", (int)n, out, suffix);
+}
+
+static int write_summary(const char *path, const char *scene, const sg_ref_desc *d, const sg_ref_result *r,
+                         uint64_t hash)
+{
+    cJSON *o = cJSON_CreateObject();
+    char hex[32];
+    snprintf(hex, sizeof hex, "%016" PRIx64, hash);
+    cJSON_AddStringToObject(o, "scene", scene);
+    cJSON_AddStringToObject(o, "scene_hash", hex);
+    cJSON_AddNumberToObject(o, "width", d->width);
+    cJSON_AddNumberToObject(o, "height", d->height);
+    cJSON_AddNumberToObject(o, "spp", d->spp);
+    cJSON_AddNumberToObject(o, "max_depth", d->max_depth);
+    cJSON_AddNumberToObject(o, "seed", (double)d->seed);
+    double mean[3] = {r->mean_radiance[0], r->mean_radiance[1], r->mean_radiance[2]};
+    cJSON_AddItemToObject(o, "mean_radiance", cJSON_CreateDoubleArray(mean, 3));
+    cJSON_AddNumberToObject(o, "seconds", r->seconds);
+    cJSON_AddNumberToObject(o, "paths", (double)r->paths);
+    cJSON_AddNumberToObject(o, "rays", (double)r->rays.rays);
+    cJSON_AddNumberToObject(o, "mrays_per_s", r->seconds > 0 ? (double)r->rays.rays / r->seconds / 1e6 : 0.0);
+    char *text = cJSON_Print(o);
+    cJSON_Delete(o);
+    if (!text)
+        return 0;
+    /* Temporary name, then rename: no partial summary in place of a good one. */
+    char tmp[4300];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
+        return 0;
+    FILE *f = fopen(tmp, "w");
+    int ok = f && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
+    if (f && fclose(f) != 0)
+        ok = 0;
+    cJSON_free(text);
+    if (!ok || rename(tmp, path) != 0) {
+        remove(tmp);
+        return 0;
+    }
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    const char *scene_path = NULL, *camera = NULL, *out = "out/ref.exr";
+    long spp = 0, depth = -1, width = 0, height = 0, threads = 0, seed = -1;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help")) {
+            fputs(usage, stdout);
+            return 0;
+        } else if (!strcmp(a, "--camera") && v) {
+            camera = v;
+            ++i;
+        } else if (!strcmp(a, "--out") && v) {
+            out = v;
+            ++i;
+        } else if (!strcmp(a, "--spp")) {
+            if (!parse_int(a, v, 1, SG_REF_MAX_SPP, &spp)) return 1;
+            ++i;
+        } else if (!strcmp(a, "--max-depth")) {
+            if (!parse_int(a, v, 0, 100000, &depth)) return 1;
+            ++i;
+        } else if (!strcmp(a, "--width")) {
+            if (!parse_int(a, v, 1, 16384, &width)) return 1;
+            ++i;
+        } else if (!strcmp(a, "--height")) {
+            if (!parse_int(a, v, 1, 16384, &height)) return 1;
+            ++i;
+        } else if (!strcmp(a, "--threads")) {
+            if (!parse_int(a, v, 1, 4096, &threads)) return 1;
+            ++i;
+        } else if (!strcmp(a, "--seed")) {
+            if (!parse_int(a, v, 0, 2147483647L, &seed)) return 1;
+            ++i;
+        } else if (a[0] == '-') {
+            fprintf(stderr, "splatgi-ref: unknown option '%s' (see --help)\n", a);
+            return 1;
+        } else if (!scene_path) {
+            scene_path = a;
+        } else {
+            return fail("more than one scene file given");
+        }
+    }
+    if (!scene_path)
+        return fail("no scene file given (see --help)");
+
+    sg_error err = {0};
+    sg_scene_file sf;
+    if (sg_scene_file_load(scene_path, &sf, &err) != SG_OK)
+        return fail(err.message);
+    sg_world *world = NULL;
+    int rc = 1;
+    sg_ref_result r = {0};
+    if (sg_world_create(&sf, &world, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
+    sg_ref_desc d = {
+        .width = width ? (int)width : sf.render.width,
+        .height = height ? (int)height : sf.render.height,
+        .spp = spp ? (int)spp : sf.render.spp,
+        .max_depth = depth >= 0 ? (int)depth : sf.render.max_depth,
+        .seed = seed >= 0 ? (uint64_t)seed : sf.render.seed,
+        .threads = threads ? (int)threads : sf.render.threads,
+    };
+    float aspect = (float)d.width / (float)d.height;
+    const sg_scene_camera *cam = camera ? sg_scene_file_find_camera(&sf, camera)
+                                        : (sf.camera_count ? &sf.cameras[0] : NULL);
+    if (camera && !cam) {
+        fprintf(stderr, "splatgi-ref: %s: no camera named '%s'\n", scene_path, camera);
+        goto done;
+    }
+    sg_status st = cam ? sg_camera_look_at(cam->eye, cam->look, cam->up, cam->fov_deg, aspect, &d.camera, &err)
+                       : sg_camera_frame(sg_world_bounds(world), sg_v3(0.0f, -0.35f, -1.0f), sg_v3(0, 1, 0), 40.0f,
+                                         aspect, 0.0f, &d.camera, &err);
+    if (st != SG_OK || sg_ref_render(world, &d, &r, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
+    char se_path[4200], json_path[4200];
+    sibling(out, ".stderr.exr", se_path, sizeof se_path);
+    sibling(out, ".json", json_path, sizeof json_path);
+    if (sg_image_write(&r.mean, out, 1.0f, &err) != SG_OK || sg_image_write(&r.std_error, se_path, 1.0f, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
+    if (!write_summary(json_path, scene_path, &d, &r, sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL))) {
+        fprintf(stderr, "splatgi-ref: %s: cannot write the summary\n", json_path);
+        goto done;
+    }
+    printf("splatgi-ref: %dx%d, %d spp, %.2f s, %.2f Mrays/s, mean radiance (%.5g, %.5g, %.5g) -> %s\n", d.width,
+           d.height, d.spp, r.seconds, r.seconds > 0 ? (double)r.rays.rays / r.seconds / 1e6 : 0.0,
+           r.mean_radiance[0], r.mean_radiance[1], r.mean_radiance[2], out);
+    rc = 0;
+done:
+    sg_ref_result_free(&r);
+    sg_world_destroy(world);
+    sg_scene_file_free(&sf);
+    return rc;
+}
