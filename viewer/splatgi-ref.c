@@ -25,6 +25,8 @@ static const char usage[] =
     "  --max-depth N     scattering events per path (default: render.max_depth)\n"
     "  --width W --height H   image size (default: the file's)\n"
     "  --seed S --threads N\n"
+    "  --progressive     render in passes of doubling size (1, 1, 2, 4, ... paths)\n"
+    "                    and rewrite the outputs after each pass\n"
     "  --out FILE.exr    mean radiance (default out/ref.exr); beside it\n"
     "                    FILE.stderr.exr (standard error) and FILE.json (summary)\n"
     "  --help\n";
@@ -100,11 +102,14 @@ int main(int argc, char **argv)
 {
     const char *scene_path = NULL, *camera = NULL, *out = "out/ref.exr";
     long spp = 0, depth = -1, width = 0, height = 0, threads = 0, seed = -1;
+    int progressive = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help")) {
             fputs(usage, stdout);
             return 0;
+        } else if (!strcmp(a, "--progressive")) {
+            progressive = 1;
         } else if (!strcmp(a, "--camera") && v) {
             camera = v;
             ++i;
@@ -170,20 +175,51 @@ int main(int argc, char **argv)
     sg_status st = cam ? sg_camera_look_at(cam->eye, cam->look, cam->up, cam->fov_deg, aspect, &d.camera, &err)
                        : sg_camera_frame(sg_world_bounds(world), sg_v3(0.0f, -0.35f, -1.0f), sg_v3(0, 1, 0), 40.0f,
                                          aspect, 0.0f, &d.camera, &err);
-    if (st != SG_OK || sg_ref_render(world, &d, &r, &err) != SG_OK) {
+    if (st != SG_OK) {
         fail(err.message);
         goto done;
     }
     char se_path[4200], json_path[4200];
     sibling(out, ".stderr.exr", se_path, sizeof se_path);
     sibling(out, ".json", json_path, sizeof json_path);
-    if (sg_image_write(&r.mean, out, 1.0f, &err) != SG_OK || sg_image_write(&r.std_error, se_path, 1.0f, &err) != SG_OK) {
-        fail(err.message);
-        goto done;
-    }
-    if (!write_summary(json_path, scene_path, &d, &r, sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL))) {
-        fprintf(stderr, "splatgi-ref: %s: cannot write the summary\n", json_path);
-        goto done;
+    int total = d.spp, done_spp = 0;
+    while (done_spp < total) {
+        /* One pass, or doubling passes: the image after each has as many
+         * paths as all before it together. */
+        int n = progressive ? (done_spp ? done_spp : 1) : total;
+        if (n > total - done_spp)
+            n = total - done_spp;
+        sg_ref_desc pass = d;
+        pass.spp = n;
+        pass.first_sample = (uint32_t)done_spp;
+        sg_ref_result pr;
+        if (sg_ref_render(world, &pass, &pr, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
+        if (done_spp == 0) {
+            r = pr;
+        } else {
+            st = sg_ref_result_merge(&r, done_spp, &pr, n, &err);
+            sg_ref_result_free(&pr);
+            if (st != SG_OK) {
+                fail(err.message);
+                goto done;
+            }
+        }
+        done_spp += n;
+        d.spp = done_spp;
+        if (sg_image_write(&r.mean, out, 1.0f, &err) != SG_OK ||
+            sg_image_write(&r.std_error, se_path, 1.0f, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
+        if (!write_summary(json_path, scene_path, &d, &r, sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL))) {
+            fprintf(stderr, "splatgi-ref: %s: cannot write the summary\n", json_path);
+            goto done;
+        }
+        if (progressive)
+            printf("splatgi-ref: %d of %d spp, %.2f s\n", done_spp, total, r.seconds);
     }
     printf("splatgi-ref: %dx%d, %d spp, %.2f s, %.2f Mrays/s, mean radiance (%.5g, %.5g, %.5g) -> %s\n", d.width,
            d.height, d.spp, r.seconds, r.seconds > 0 ? (double)r.rays.rays / r.seconds / 1e6 : 0.0,

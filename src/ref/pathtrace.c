@@ -182,3 +182,31 @@ void sg_ref_result_free(sg_ref_result *r)
     sg_image_free(&r->std_error);
     memset(r, 0, sizeof *r);
 }
+
+sg_status sg_ref_result_merge(sg_ref_result *a, int na, const sg_ref_result *b, int nb, sg_error *err)
+{
+    if (!a || !b || na < 1 || nb < 1)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "reference merge: bad arguments");
+    if (a->mean.width != b->mean.width || a->mean.height != b->mean.height)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "reference merge: %dx%d and %dx%d images", a->mean.width,
+                            a->mean.height, b->mean.width, b->mean.height);
+    size_t n = (size_t)3 * (size_t)a->mean.width * (size_t)a->mean.height;
+    double n1 = na, n2 = nb, nt = n1 + n2;
+    for (size_t i = 0; i < n; ++i) {
+        /* sum = n m; sum of squares = (n - 1) s^2 + n m^2, s^2 = n se^2. */
+        double m1 = a->mean.data[i], m2 = b->mean.data[i];
+        double se1 = a->std_error.data[i], se2 = b->std_error.data[i];
+        double q1 = (n1 - 1.0) * n1 * se1 * se1 + n1 * m1 * m1;
+        double q2 = (n2 - 1.0) * n2 * se2 * se2 + n2 * m2 * m2;
+        double mean = (n1 * m1 + n2 * m2) / nt;
+        double var = fmax(0.0, (q1 + q2 - nt * mean * mean) / (nt - 1.0));
+        a->mean.data[i] = (float)mean;
+        a->std_error.data[i] = (float)sqrt(var / nt);
+    }
+    for (int c = 0; c < 3; ++c)
+        a->mean_radiance[c] = (n1 * a->mean_radiance[c] + n2 * b->mean_radiance[c]) / nt;
+    a->seconds += b->seconds;
+    a->paths += b->paths;
+    sg_ray_stats_add(&a->rays, &b->rays);
+    return SG_OK;
+}

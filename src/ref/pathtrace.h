@@ -59,6 +59,13 @@ sg_status sg_ref_render(const sg_world *w, const sg_ref_desc *d, sg_ref_result *
 
 void sg_ref_result_free(sg_ref_result *r);
 
+/* Progressive rendering: folds result b (nb paths per pixel, a sample range
+ * disjoint from a's) into a (na paths per pixel), so that a becomes the
+ * result of all na + nb paths: exact pooled means and standard errors
+ * (sums and sums of squares are recovered from mean and standard error).
+ * Both must have the same size. */
+sg_status sg_ref_result_merge(sg_ref_result *a, int na, const sg_ref_result *b, int nb, sg_error *err);
+
 /* One path's radiance through image point (x, y) in pixels, path index
  * `path` (exposed for tests of the estimator). */
 sg_vec3 sg_ref_path(const sg_world *w, const sg_ref_desc *d, float x, float y, uint64_t path, sg_ray_stats *st);

@@ -285,6 +285,36 @@ static void test_ref_per_pixel_z_test(void **state)
     sg_world_destroy(w);
 }
 
+/* Progressive passes: 8 + 24 paths over disjoint sample ranges, merged,
+ * equal the single 32-path render (same paths), to float rounding of the
+ * recovered sums. */
+static void test_ref_progressive_merge_equals_single_render(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000}],"
+                                  "\"envmap\":{\"builtin\":\"sky\"}}");
+    sg_ref_desc d = desc_look(sg_v3(0, 0.5f, 3.0f), sg_v3(0, 0, 0), 40.0f, 16, 32, 6);
+    sg_ref_result whole, a, b;
+    assert_int_equal(sg_ref_render(w, &d, &whole, NULL), SG_OK);
+    d.spp = 8;
+    assert_int_equal(sg_ref_render(w, &d, &a, NULL), SG_OK);
+    d.first_sample = 8;
+    d.spp = 24;
+    assert_int_equal(sg_ref_render(w, &d, &b, NULL), SG_OK);
+    assert_int_equal(sg_ref_result_merge(&a, 8, &b, 24, NULL), SG_OK);
+    for (size_t i = 0; i < (size_t)3 * 16 * 16; ++i) {
+        float m = whole.mean.data[i], e = whole.std_error.data[i];
+        if (!(fabsf(a.mean.data[i] - m) <= 1e-4f * (fabsf(m) + 1e-3f)) ||
+            !(fabsf(a.std_error.data[i] - e) <= 1e-3f * (e + 1e-3f)))
+            fail_msg("value %zu: merged mean %g se %g, single render mean %g se %g", i, a.mean.data[i],
+                     a.std_error.data[i], m, e);
+    }
+    sg_ref_result_free(&whole);
+    sg_ref_result_free(&a);
+    sg_ref_result_free(&b);
+    sg_world_destroy(w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -296,6 +326,7 @@ int main(void)
         cmocka_unit_test(test_ref_deterministic_across_threads),
         cmocka_unit_test(test_ref_variance_falls_as_one_over_n),
         cmocka_unit_test(test_ref_per_pixel_z_test),
+        cmocka_unit_test(test_ref_progressive_merge_equals_single_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
