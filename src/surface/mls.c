@@ -679,6 +679,29 @@ int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb 
         memcpy(bits, lo, sizeof bits);
         key = ((uint64_t)bits[0] << 32 | bits[1]) ^ ((uint64_t)bits[2] * 0x9E3779B97F4A7C15ull) ^ count;
     }
+    /* Quick rejection first: f is the distance to the local plane, so where
+     * the surface crosses the cell, |f| at any point of the cell is at most
+     * the cell's diagonal (same local-planarity assumption as eps). If 8
+     * points spread over the cell all see the plane farther than 1.5
+     * diagonals, on the same side, no surface is inside. Most of the cells
+     * that end up empty go here, for 8 evaluations instead of 8 slices. */
+    {
+        float diag = sqrtf(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]);
+        float x[3][8], f[8];
+        int ok[8], far_pos = 0, far_neg = 0;
+        for (int l = 0; l < 8; ++l) /* the cube's corners pulled in to 1/4 and 3/4 */
+            for (int c3 = 0; c3 < 3; ++c3)
+                x[c3][l] = lo[c3] + ext[c3] * ((l >> c3) & 1 ? 0.75f : 0.25f);
+        plane_distance8(&sp, ctx->kernel, x, f, ok);
+        for (int l = 0; l < 8; ++l) {
+            far_pos += ok[l] && f[l] > 1.5f * diag;
+            far_neg += ok[l] && f[l] < -1.5f * diag;
+        }
+        if (far_pos == 8 || far_neg == 8) {
+            sg_free(buf);
+            return 0;
+        }
+    }
     /* Only the ends can be cut off, so search inwards from both sides. */
     int first = 0, last = SHRINK_SLICES - 1;
     while (first < SHRINK_SLICES && !slice_may_hold_surface(&sp, ctx->kernel, lo, ext, a, first, eps, key))
