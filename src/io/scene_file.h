@@ -98,7 +98,7 @@
 #include "core/error.h"
 #include "material/bsdf.h"
 #include "math/vec3.h"
-#include "render/default_scene.h"
+#include "points/model_points.h"
 #include "surface/scene.h"
 
 #define SG_SCENE_NAME_MAX 64 /* camera names: at most 63 bytes + NUL */

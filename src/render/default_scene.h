@@ -1,4 +1,4 @@
-/* default_scene.h — the built-in scene, and turning a model file into splats.
+/* default_scene.h — the built-in scene: the bunny on a ground plane.
  *
  * The default scene is the Stanford bunny (assets/bunny.ply, made by
  * scripts/setup.sh from the npm package bunny@1.0.1: 1839 vertices, 3674
@@ -7,12 +7,7 @@
  * of the bunny from slightly above) and a light direction (upper left,
  * in front). It is what `splatgi-render --default` and the benchmarks draw.
  *
- * Model pipeline (both the bunny and `splatgi-render --model`):
- *   mesh     -> area-weighted samples with smooth (interpolated) normals
- *   cloud    -> its vertices; normals from the file, estimated where absent
- *   then     -> radius = scale x distance to the k-th nearest neighbour
- *               (file radii, when present, are kept and scaled)
- *   albedo   -> the file's colours, else the clay colour below.
+ * Models become splats through points/model_points.h.
  *
  * Ownership: the pointsets returned are the caller's; free them with
  * sg_default_scene_free / sg_pointset_free. Errors name the file.
@@ -24,27 +19,9 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "points/model_points.h"
 #include "points/pointset.h"
 #include "render/camera.h"
-
-/* Albedo of model splats when the file has no colours: a light clay. */
-#define SG_DEFAULT_ALBEDO_R 0.78f
-#define SG_DEFAULT_ALBEDO_G 0.62f
-#define SG_DEFAULT_ALBEDO_B 0.50f
-
-/* How a model file becomes splats; zero means the documented default. */
-typedef struct sg_model_points_desc {
-    size_t points;       /* mesh: number of samples, default 250000;
-                            point cloud: ignored (its vertices are used)   */
-    unsigned radius_k;   /* radius from the k-th nearest neighbour; default 8 */
-    float radius_scale;  /* radius multiplier; default 1                    */
-    uint64_t seed;       /* mesh sampling seed; default 0 (a valid seed)    */
-} sg_model_points_desc;
-
-/* Loads a .ply or .obj (sg_mesh_read) and makes splats as described above.
- * d may be NULL. *out is written only on SG_OK. */
-sg_status sg_model_points_load(const char *path, const sg_model_points_desc *d, sg_pointset *out,
-                               sg_error *err);
 
 /* Default scene options; zero means the documented default. */
 typedef struct sg_default_scene_desc {
