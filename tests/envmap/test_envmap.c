@@ -19,6 +19,7 @@
  *    real maps load by path (.exr and .hdr) and count their negatives.
  */
 #include "test_support.h"
+#include "test_stats.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -346,40 +347,6 @@ static void test_envmap_pdf_integrates_to_one(void **state)
 
 /* ---- 3. chi-square ------------------------------------------------------------ */
 
-/* Regularised upper incomplete gamma Q(a, x) (Numerical Recipes 6.2):
- * series for x < a + 1, Lentz continued fraction otherwise. */
-static double gamma_q(double a, double x)
-{
-    if (x <= 0.0)
-        return 1.0;
-    double lg = lgamma(a);
-    if (x < a + 1.0) {
-        double ap = a, del = 1.0 / a, sum = del;
-        for (int n = 0; n < 100000 && fabs(del) > fabs(sum) * 1e-15; n++) {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-        }
-        return 1.0 - sum * exp(-x + a * log(x) - lg);
-    }
-    double b = x + 1.0 - a, c = 1.0 / 1e-300, d = 1.0 / b, h = d;
-    for (int i = 1; i < 100000; i++) {
-        double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        if (fabs(d) < 1e-300)
-            d = 1e-300;
-        c = b + an / c;
-        if (fabs(c) < 1e-300)
-            c = 1e-300;
-        d = 1.0 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1.0) < 1e-15)
-            break;
-    }
-    return exp(-x + a * log(x) - lg) * h;
-}
 
 /* Pearson chi-square over cells, pooling cells with < 5 expected into one
  * (pbrt-v4 chi2test). Returns the p-value; a count in a zero-expected cell
@@ -410,7 +377,7 @@ static double chi2_pvalue(const double *observed, const double *expected, size_t
     }
     dof -= 1;
     *dof_out = dof;
-    return gamma_q(0.5 * dof, 0.5 * chi2);
+    return sg_test_gamma_q(0.5 * dof, 0.5 * chi2);
 }
 
 static void test_envmap_chi_square(void **state)

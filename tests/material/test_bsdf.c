@@ -27,6 +27,7 @@
  * sg_bsdf_eval / sg_bsdf_pdf only as integrands.
  */
 #include "test_support.h"
+#include "test_stats.h"
 
 #include <float.h>
 #include <math.h>
@@ -41,131 +42,6 @@
 #define PI_D 3.14159265358979323846
 #define SEED 0xB5DFull
 
-/* ---- statistics helpers ---------------------------------------------- */
-
-/* Regularised upper incomplete gamma Q(a, x) (Numerical Recipes 6.2:
- * series below a + 1, continued fraction above). */
-static double gamma_q(double a, double x)
-{
-    if (x <= 0.0)
-        return 1.0;
-    double gln = lgamma(a);
-    if (x < a + 1.0) {
-        double ap = a, sum = 1.0 / a, del = sum;
-        for (int n = 0; n < 10000 && fabs(del) > fabs(sum) * 1e-15; ++n) {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-        }
-        return 1.0 - sum * exp(-x + a * log(x) - gln);
-    }
-    double b = x + 1.0 - a, c = 1.0 / 1e-300, d = 1.0 / b, h = d;
-    for (int i = 1; i < 10000; ++i) {
-        double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        if (fabs(d) < 1e-300)
-            d = 1e-300;
-        c = b + an / c;
-        if (fabs(c) < 1e-300)
-            c = 1e-300;
-        d = 1.0 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1.0) < 1e-15)
-            break;
-    }
-    return exp(-x + a * log(x) - gln) * h;
-}
-
-static const double *g_sort_key;
-static int by_expected(const void *a, const void *b)
-{
-    double x = g_sort_key[*(const size_t *)a], y = g_sort_key[*(const size_t *)b];
-    return (x > y) - (x < y);
-}
-
-/* Pearson chi-square p-value of observed vs expected counts, pooling cells
- * under 5 expected (smallest first) so the chi-square approximation holds.
- * A sample in a cell of expected 0 is an outright failure (p = 0). On a
- * failure the table goes to <tmpdir>/<name>.tsv for plotting. */
-static double chi2_test(const char *name, const double *obs, const double *expd, size_t n, int *dof_out,
-                        double *chi2_out)
-{
-    size_t *idx = malloc(n * sizeof *idx);
-    assert_non_null(idx);
-    for (size_t i = 0; i < n; ++i) {
-        idx[i] = i;
-        if (expd[i] == 0.0 && obs[i] > 0.0) {
-            fprintf(stderr, "%s: %g samples in cell %zu whose expected count is 0\n", name, obs[i], i);
-            free(idx);
-            *dof_out = 0;
-            *chi2_out = INFINITY;
-            return 0.0;
-        }
-    }
-    g_sort_key = expd;
-    qsort(idx, n, sizeof *idx, by_expected);
-    double chi2 = 0.0, po = 0.0, pe = 0.0, last_o = 0.0, last_e = 0.0;
-    int cells = 0;
-    for (size_t k = 0; k < n; ++k) {
-        double o = obs[idx[k]], e = expd[idx[k]];
-        if (e < 5.0) {
-            po += o;
-            pe += e;
-            if (pe < 5.0)
-                continue;
-            o = po;
-            e = pe;
-            po = pe = 0.0;
-        }
-        chi2 += (o - e) * (o - e) / e;
-        ++cells;
-        last_o = o;
-        last_e = e;
-    }
-    if (pe > 0.0 && cells > 0) { /* leftover pool: merge into the last cell */
-        chi2 -= (last_o - last_e) * (last_o - last_e) / last_e;
-        last_o += po;
-        last_e += pe;
-        chi2 += (last_o - last_e) * (last_o - last_e) / last_e;
-    }
-    free(idx);
-    int dof = cells - 1;
-    double p = dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0;
-    *dof_out = dof;
-    *chi2_out = chi2;
-    return p;
-}
-
-static void dump_table(const char *name, const double *obs, const double *expd, size_t n, size_t cols)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s.tsv", sg_test_tmpdir(), name);
-    FILE *f = fopen(path, "w");
-    if (!f)
-        return;
-    fprintf(f, "row\tcol\tobserved\texpected\n");
-    for (size_t i = 0; i < n; ++i)
-        fprintf(f, "%zu\t%zu\t%.0f\t%.3f\n", i / cols, i % cols, obs[i], expd[i]);
-    fclose(f);
-    fprintf(stderr, "%s: table written to %s\n", name, path);
-}
-
-/* Sidak: each of m tests at 1 - (1 - alpha)^(1/m) keeps the family at alpha. */
-static double sidak(double alpha, int m) { return 1.0 - pow(1.0 - alpha, 1.0 / m); }
-
-/* Fibonacci lattice F_22 points, generator F_21, shifted by (s0, s1)
- * (Cranley-Patterson), point i. Independent random shifts make each
- * lattice sum an unbiased estimate whose spread gives a standard error. */
-#define LATTICE_N 17711
-#define LATTICE_G 10946
-static void lattice(size_t i, double s0, double s1, double *u0, double *u1)
-{
-    double a = (double)i / LATTICE_N + s0, b = (double)((i * LATTICE_G) % LATTICE_N) / LATTICE_N + s1;
-    *u0 = a - floor(a);
-    *u1 = b - floor(b);
-}
 
 /* ---- frames and materials --------------------------------------------- */
 
@@ -254,9 +130,9 @@ static void qmc_hemisphere(const qmc_setup *q, uint64_t stream, double *mean, do
     for (int j = 0; j < R; ++j) {
         double s0 = sg_rng_float(SEED, stream, (uint32_t)j, 0), s1 = sg_rng_float(SEED, stream, (uint32_t)j, 1);
         double acc = 0.0;
-        for (size_t i = 0; i < LATTICE_N; ++i) {
+        for (size_t i = 0; i < SG_TEST_LATTICE_N; ++i) {
             double u0, u1;
-            lattice(i, s0, s1, &u0, &u1);
+            sg_test_lattice(i, s0, s1, &u0, &u1);
             sg_vec3 d = sg_warp_cosine_hemisphere_sample((float)u0, (float)u1);
             if (d.z > 0.0f)
                 acc += mis_term(q, d);
@@ -271,7 +147,7 @@ static void qmc_hemisphere(const qmc_setup *q, uint64_t stream, double *mean, do
                 acc += mis_term(q, sg_v3((float)(wx / l), (float)(wy / l), (float)(wz / l)));
             }
         }
-        double est = acc / LATTICE_N;
+        double est = acc / SG_TEST_LATTICE_N;
         sum += est;
         sum2 += est * est;
     }
@@ -619,7 +495,7 @@ static void test_bsdf_chi2(void **state)
     config cf[NCONF];
     configs(cf);
     frame f = test_frame();
-    const double alpha = sidak(0.01, NCONF);
+    const double alpha = sg_test_sidak(0.01, NCONF);
     double *obs = calloc(CT * CP, sizeof *obs), *expd = calloc(CT * CP, sizeof *expd);
     assert_non_null(obs);
     assert_non_null(expd);
@@ -643,10 +519,10 @@ static void test_bsdf_chi2(void **state)
         }
         expected_counts(&cf[ci], &f, wo, expd);
         int dof;
-        double chi2, p = chi2_test(cf[ci].name, obs, expd, CT * CP, &dof, &chi2);
+        double chi2, p = sg_test_chi2(cf[ci].name, obs, expd, CT * CP, &dof, &chi2);
         printf("%s: chi2 = %.1f, dof = %d, p = %.4f (reject below %.5f)\n", cf[ci].name, chi2, dof, p, alpha);
         if (!(p >= alpha)) {
-            dump_table(cf[ci].name, obs, expd, CT * CP, CP);
+            sg_test_dump_table(cf[ci].name, obs, expd, CT * CP, CP);
             fail_msg("%s: chi-square %.1f with %d dof, p = %.3g < %.3g", cf[ci].name, chi2, dof, p, alpha);
         }
     }
