@@ -193,6 +193,50 @@ void sg_scene_destroy(sg_scene *sc)
     sg_free(sc);
 }
 
+int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    if (max <= 0 || hit->splat == SG_INVALID_ID)
+        return 0;
+    int n = 0;
+    float total = 0.0f;
+    if (hit->leaf < sc->tree.leaf_count) {
+        const sg_splat_soa *s = &sc->soa;
+        size_t first = sc->tree.leaf_first[hit->leaf], end = sc->tree.leaf_first[hit->leaf + 1];
+        for (size_t i = first; i < end; ++i) {
+            float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
+            float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
+            if (w <= 0.0f)
+                continue;
+            total += w;
+            if (n < max) {
+                ids[n] = s->id[i];
+                weights[n++] = w;
+                continue;
+            }
+            /* Full: replace the smallest weight kept. */
+            int k = 0;
+            for (int j = 1; j < n; ++j)
+                if (weights[j] < weights[k])
+                    k = j;
+            if (w > weights[k]) {
+                ids[k] = s->id[i];
+                weights[k] = w;
+            }
+        }
+    }
+    if (n == 0 || !(total > 0.0f)) {
+        ids[0] = hit->splat;
+        weights[0] = 1.0f;
+        return 1;
+    }
+    float kept = 0.0f;
+    for (int j = 0; j < n; ++j)
+        kept += weights[j];
+    for (int j = 0; j < n; ++j)
+        weights[j] /= kept;
+    return n;
+}
+
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
 
 void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
@@ -244,6 +288,7 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
     sg_disk_blend blend;
     sg_disk_blend_init(&blend, sc->desc.blend_depth);
     sg_mls_carry carry = {0};
+    uint32_t disk_leaf = 0;
     stack_entry stack[STACK_SIZE];
     int sp = 0, found = 0;
     float t0, t1;
@@ -281,6 +326,7 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
             if (!disk) {
                 sg_hit h;
                 if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, t0, t1, &h, &carry)) {
+                    h.leaf = l;
                     if (hit)
                         *hit = h;
                     found = 1;
@@ -292,7 +338,10 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
                     goto done;
                 }
             } else {
+                int had = !isinf(blend.t_near);
                 sg_disk_leaf(&sc->soa, lf, lc, ray, t0, t1, &blend);
+                if (!had && !isinf(blend.t_near))
+                    disk_leaf = l; /* the nearest disk's leaf */
                 if (blend.t_end <= t1)
                     break;
             }
@@ -311,6 +360,7 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
     if (disk && q == QUERY_NEAREST) {
         sg_hit h;
         if (sg_disk_blend_finish(&blend, ray, &h)) {
+            h.leaf = disk_leaf;
             if (hit)
                 *hit = h;
             found = 1;

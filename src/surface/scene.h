@@ -97,6 +97,15 @@ int sg_scene_intersect(const sg_scene *scene, const sg_ray *ray, sg_hit *hit,
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays). */
 int sg_scene_occluded(const sg_scene *scene, const sg_ray *ray, sg_ray_stats *stats);
 
+/* The splats around a hit and their normalised interpolation weights
+ * w_i = K(|p - p_i| / r_i) / sum (the scene's MLS kernel, for both surface
+ * models), from the leaf the hit was found in: that leaf holds every splat
+ * whose support covers p, so the weights are those of the smooth surface.
+ * Writes at most max entries (the largest weights) and returns the count;
+ * falls back to the hit's dominant splat with weight 1. Use it to
+ * interpolate per-splat data (baked light) without seams. */
+int sg_scene_hit_weights(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
+
 /* The pointset the scene was built from (its own copy), for albedo lookups. */
 const sg_pointset *sg_scene_points(const sg_scene *scene);
 
