@@ -5,8 +5,8 @@
  * leaf's cell (primitives straddling a plane go to both sides). It knows
  * nothing of splats: the caller supplies boxes, and optionally a shrink hook
  * that tightens a leaf cell to where the surface actually is (§3.4.1); the
- * builder then inserts the planes that cut the empty space off and drops the
- * primitives that no longer overlap the cell.
+ * leaf keeps that box (leaf_bounds) for traversal to clip against, and the
+ * builder drops the primitives that no longer overlap it.
  *
  * Layout of the built tree (what traversal reads):
  *   nodes[0] is the root. An inner node has split axis 0..2, the split
@@ -17,7 +17,7 @@
  * Invariants after sg_kdtree_build:
  *  1. every inner node's children are a pair in nodes[], after the parent;
  *  2. leaf_first has leaf_count + 1 entries, non-decreasing, last = ref_count;
- *  3. every primitive overlapping a non-empty leaf's final cell is in it, so
+ *  3. every primitive overlapping a non-empty leaf's box (leaf_bounds) is in it, so
  *     a function supported on the primitives' boxes can be evaluated exactly
  *     inside a cell from the leaf's primitives alone;
  *  4. the layout is a function of the input only, never of thread count.
@@ -73,6 +73,9 @@ typedef struct sg_kdtree {
     size_t empty_leaf_count;
     uint32_t *refs;         /* primitive ids, grouped by leaf                  */
     size_t ref_count;
+    sg_aabb *leaf_bounds;   /* per leaf: the box that holds its surface — the
+                               shrunk cell, or the cell (traversal clips the
+                               ray against it)                              */
     sg_aabb bounds;         /* root cell                                        */
     int depth;              /* deepest leaf                                     */
 } sg_kdtree;

@@ -270,6 +270,29 @@ static int clip_root(const sg_aabb *b, const sg_ray *ray, const float inv[3], fl
     return lo <= hi;
 }
 
+/* Clips [*t0, *t1] to box b; 0 when nothing is left. An axis the ray runs
+ * parallel to (inv = +-inf) only tests that the origin lies in the slab:
+ * (b - o) * inf would be NaN when the origin sits on the face. */
+static inline int clip_box(const sg_aabb *b, const float org[3], const float inv[3], float *t0, float *t1)
+{
+    const float bl[3] = {b->lo.x, b->lo.y, b->lo.z}, bh[3] = {b->hi.x, b->hi.y, b->hi.z};
+    float lo = *t0, hi = *t1;
+    for (int a = 0; a < 3; ++a) {
+        if (isinf(inv[a])) {
+            if (org[a] < bl[a] || org[a] > bh[a])
+                return 0;
+            continue;
+        }
+        float ta = (bl[a] - org[a]) * inv[a], tb = (bh[a] - org[a]) * inv[a];
+        float tn = ta < tb ? ta : tb, tf = ta < tb ? tb : ta;
+        if (tn > lo) lo = tn;
+        if (tf < hi) hi = tf;
+    }
+    *t0 = lo;
+    *t1 = hi;
+    return lo <= hi;
+}
+
 typedef struct stack_entry {
     uint32_t node;
     float t0, t1;
@@ -320,12 +343,15 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
         uint32_t l = sg_kd_node_index(n);
         size_t lf = leaf_first[l], lc = leaf_first[l + 1] - lf;
         st.leaves++;
+        float c0 = t0, c1 = t1;
+        if (lc && !clip_box(&sc->tree.leaf_bounds[l], org, inv, &c0, &c1))
+            lc = 0; /* the ray passes the leaf's empty part only */
         if (lc) {
             st.isects++;
             st.splats += lc;
             if (!disk) {
                 sg_hit h;
-                if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, t0, t1, &h, &carry)) {
+                if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, ray, c0, c1, &h, &carry)) {
                     h.leaf = l;
                     if (hit)
                         *hit = h;
@@ -333,13 +359,13 @@ static int traverse(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_s
                     goto done;
                 }
             } else if (q == QUERY_ANY) {
-                if (sg_disk_leaf_any(&sc->soa, lf, lc, ray, t0, t1)) {
+                if (sg_disk_leaf_any(&sc->soa, lf, lc, ray, c0, c1)) {
                     found = 1;
                     goto done;
                 }
             } else {
                 int had = !isinf(blend.t_near);
-                sg_disk_leaf(&sc->soa, lf, lc, ray, t0, t1, &blend);
+                sg_disk_leaf(&sc->soa, lf, lc, ray, c0, c1, &blend);
                 if (!had && !isinf(blend.t_near))
                     disk_leaf = l; /* the nearest disk's leaf */
                 if (blend.t_end <= t1)

@@ -154,8 +154,8 @@ static int shrink_to_nothing(void *user, const uint32_t *prims, size_t count, sg
     return 0;
 }
 
-/* Leaves outside the slab end up empty; every non-empty leaf's cell lies in
- * the slab (the builder turned the cut faces into planes with empty sides). */
+/* Leaves outside the slab end up empty; every non-empty leaf keeps a box
+ * (leaf_bounds) that lies in the slab and inside its cell. */
 static void check_slab(const sg_kdtree *t, uint32_t ni, sg_aabb cell, size_t *nonempty)
 {
     sg_kd_node n = t->nodes[ni];
@@ -163,7 +163,9 @@ static void check_slab(const sg_kdtree *t, uint32_t ni, sg_aabb cell, size_t *no
         uint32_t l = sg_kd_node_index(n);
         if (t->leaf_first[l + 1] > t->leaf_first[l]) {
             ++*nonempty;
-            assert_true(cell.lo.y >= 0.45f - 1e-6f && cell.hi.y <= 0.55f + 1e-6f);
+            sg_aabb b = t->leaf_bounds[l];
+            assert_true(b.lo.y >= 0.45f - 1e-6f && b.hi.y <= 0.55f + 1e-6f);
+            assert_true(b.lo.x >= cell.lo.x && b.hi.x <= cell.hi.x && b.lo.z >= cell.lo.z && b.hi.z <= cell.hi.z);
         }
         return;
     }
@@ -189,7 +191,7 @@ static void test_kdtree_shrink_hook_cuts_empty_space(void **state)
     size_t nonempty = 0;
     check_slab(&t, 0, t.bounds, &nonempty);
     assert_true(nonempty > 0);
-    assert_true(t.empty_leaf_count > 0);
+    assert_true(t.empty_leaf_count > 0); /* the cells wholly outside the slab */
     sg_kdtree_free(&t);
 }
 
