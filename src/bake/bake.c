@@ -1,5 +1,11 @@
 /* bake.c — photon pass + gather, and the lookup (see bake.h).
  *
+ * States of a bake and the function behind each step:
+ *   world LOADED (sg_world_create) -> photons TRACED (sg_photons_trace or
+ *   sg_photons_trace_more per chunk, checkpointable: bake_io.h) ->
+ *   GATHERED (sg_bake_create_from_photons; sg_bake_create does both) ->
+ *   WRITTEN (sg_bake_save) -> LOADED again (sg_bake_load) -> lookups.
+ *
  * Invariants:
  *  1. E[m] holds 3 floats per splat of model m, in the order of
  *     sg_scene_points(sg_world_scene(w, m)), finite and >= 0;
@@ -8,6 +14,7 @@
  */
 #include "bake/bake.h"
 
+#include <assert.h>
 #include <math.h>
 #include <omp.h>
 #include <string.h>
@@ -20,46 +27,138 @@ enum { LOOKUP_SPLATS = 32, TILE = 16 };
 
 struct sg_bake {
     size_t models;
-    size_t *count;  /* splats per model                 */
+    size_t *count;  /* splats per model                   */
     float **E;      /* irradiance per splat (invariant 1) */
-    sg_bake_info info;
+    sg_bake_desc desc;   /* resolved; threads/progress cleared */
+    sg_bake_stats stats;
 };
 
-sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *desc, sg_bake **out, sg_error *err)
+sg_bake_desc sg_bake_desc_resolve(const sg_bake_desc *desc)
 {
     sg_bake_desc d = desc ? *desc : (sg_bake_desc){0};
+    d.photons = sg_photon_desc_resolve(&d.photons);
+    /* irradiance.h's defaults, spelt out so the parameter hash sees them */
+    if (d.gather.k == 0) d.gather.k = 64;
+    if (d.gather.normal_cos == 0.0f) d.gather.normal_cos = 0.7f;
+    return d;
+}
+
+static void fnv_u64(uint64_t *h, uint64_t v)
+{
+    for (int i = 0; i < 8; ++i) {
+        *h ^= (v >> (8 * i)) & 0xffu;
+        *h *= 0x100000001b3ull;
+    }
+}
+
+uint64_t sg_bake_param_hash(const sg_bake_desc *desc)
+{
+    sg_bake_desc d = sg_bake_desc_resolve(desc);
+    uint32_t cos_bits;
+    memcpy(&cos_bits, &d.gather.normal_cos, sizeof cos_bits);
+    uint64_t h = 0xcbf29ce484222325ull;
+    fnv_u64(&h, d.photons.count);
+    fnv_u64(&h, d.photons.seed);
+    fnv_u64(&h, (uint64_t)d.photons.max_depth);
+    fnv_u64(&h, (uint64_t)d.photons.rr_depth);
+    fnv_u64(&h, d.gather.k);
+    fnv_u64(&h, cos_bits);
+    fnv_u64(&h, SG_PHOTON_BLOCK);
+    return h ? h : 1; /* 0 means "do not check" to bake_file.h */
+}
+
+sg_status sg_bake__new(size_t models, const size_t *counts, const sg_bake_desc *desc, const sg_bake_stats *stats,
+                       sg_bake **out, sg_error *err)
+{
+    sg_bake *b = sg_calloc_array(1, sizeof *b);
+    if (!b)
+        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
+    b->models = models;
+    b->desc = sg_bake_desc_resolve(desc);
+    b->desc.photons.threads = b->desc.gather.threads = 0;
+    b->desc.photons.progress = NULL;
+    b->desc.photons.progress_user = NULL;
+    if (stats)
+        b->stats = *stats;
+    b->stats.models = models;
+    b->stats.splats = 0;
+    b->count = sg_calloc_array(models, sizeof *b->count);
+    b->E = sg_calloc_array(models, sizeof *b->E);
+    if (!b->count || !b->E)
+        goto nomem;
+    for (size_t m = 0; m < models; ++m) {
+        size_t n3;
+        if (!sg_mul_size(counts[m], 3, &n3) || !(b->E[m] = sg_calloc_array(n3, sizeof(float))))
+            goto nomem;
+        b->count[m] = counts[m];
+        b->stats.splats += counts[m];
+    }
+    b->stats.memory_bytes = b->stats.splats * 3 * sizeof(float);
+    *out = b;
+    return SG_OK;
+nomem:
+    sg_bake_destroy(b);
+    return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the irradiance of %zu models", models);
+}
+
+float *sg_bake__irradiance(sg_bake *b, uint32_t m)
+{
+    assert(m < b->models);
+    return b->E[m];
+}
+
+sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *desc, const sg_photon_map *pm,
+                                      sg_bake **out, sg_error *err)
+{
+    sg_bake_desc d = sg_bake_desc_resolve(desc);
+    size_t nblocks = sg_photon_block_count(&d.photons);
+    if (pm->blocks != nblocks)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "bake: the photon map holds %zu of the pass's %zu blocks",
+                            pm->blocks, nblocks);
     sg_bake *b = sg_calloc_array(1, sizeof *b);
     if (!b)
         return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
     b->models = sg_world_model_count(w);
+    b->desc = d;
+    b->desc.photons.threads = b->desc.gather.threads = 0;
+    b->desc.photons.progress = NULL;
+    b->desc.photons.progress_user = NULL;
     b->count = sg_calloc_array(b->models, sizeof *b->count);
-    sg_photon_map pm = {0};
     sg_status st = SG_OK;
     if (!b->count) {
         st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
         goto fail;
     }
-    if ((st = sg_photons_trace(w, &d.photons, &pm, err)) != SG_OK)
-        goto fail;
     double t0 = omp_get_wtime();
-    if ((st = sg_irradiance_gather(w, &pm, &d.gather, &b->E, err)) != SG_OK)
+    if ((st = sg_irradiance_gather(w, pm, &d.gather, &b->E, err)) != SG_OK)
         goto fail;
-    b->info.gather_seconds = omp_get_wtime() - t0;
-    b->info.trace_seconds = pm.seconds;
-    b->info.photons_shot = pm.shot;
-    b->info.photon_records = pm.count;
-    b->info.models = b->models;
+    b->stats.gather_seconds = omp_get_wtime() - t0;
+    b->stats.trace_seconds = pm->seconds;
+    b->stats.photons_shot = pm->shot;
+    b->stats.photon_records = pm->count;
+    b->stats.rays = pm->rays;
+    b->stats.photon_memory_bytes = sg_photon_map_bytes(pm->count);
+    b->stats.models = b->models;
     for (size_t m = 0; m < b->models; ++m) {
         b->count[m] = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
-        b->info.splats += b->count[m];
+        b->stats.splats += b->count[m];
     }
-    b->info.memory_bytes = b->info.splats * 3 * sizeof(float);
-    sg_photon_map_free(&pm);
+    b->stats.memory_bytes = b->stats.splats * 3 * sizeof(float);
     *out = b;
     return SG_OK;
 fail:
-    sg_photon_map_free(&pm);
     sg_bake_destroy(b);
+    return st;
+}
+
+sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *desc, sg_bake **out, sg_error *err)
+{
+    sg_bake_desc d = sg_bake_desc_resolve(desc);
+    sg_photon_map pm = {0};
+    sg_status st = sg_photons_trace(w, &d.photons, &pm, err);
+    if (st == SG_OK)
+        st = sg_bake_create_from_photons(w, &d, &pm, out, err);
+    sg_photon_map_free(&pm);
     return st;
 }
 
@@ -74,7 +173,19 @@ void sg_bake_destroy(sg_bake *b)
     sg_free(b);
 }
 
-void sg_bake_get_info(const sg_bake *b, sg_bake_info *info) { *info = b->info; }
+void sg_bake_get_stats(const sg_bake *b, sg_bake_stats *stats) { *stats = b->stats; }
+
+sg_bake_desc sg_bake_get_desc(const sg_bake *b) { return b->desc; }
+
+size_t sg_bake_model_count(const sg_bake *b) { return b->models; }
+
+const float *sg_bake_irradiance_data(const sg_bake *b, uint32_t m, size_t *splats)
+{
+    assert(m < b->models);
+    if (splats)
+        *splats = b->count[m];
+    return b->E[m];
+}
 
 sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h)
 {

@@ -11,8 +11,10 @@
  * glossy material's lobe is looked up as if diffuse (its albedo is kept,
  * its highlight is not).
  *
- * States: CREATED by sg_bake_create (traced and gathered) or LOADED from a
- * file; both answer lookups for the world they were made for.
+ * States: CREATED by sg_bake_create (traced and gathered), by
+ * sg_bake_create_from_photons (gathered from a photon map traced in
+ * chunks, see photons.h) or LOADED from a file (bake/bake_io.h); all answer
+ * lookups for the world they were made for.
  *
  * Ownership: the bake keeps no pointer to the world; lookups take it as an
  * argument and must be given the same world (same scene file) the bake was
@@ -38,18 +40,53 @@ typedef struct sg_bake_desc {
     sg_irradiance_desc gather;   /* k, normal_cos (irradiance.h defaults)    */
 } sg_bake_desc;
 
-typedef struct sg_bake_info {
+/* Figures of a bake. (Not sg_bake_info: that name is the bake file's
+ * header, bake_file.h.) */
+typedef struct sg_bake_stats {
     size_t models;
     size_t splats;             /* sample points: every splat of every model */
     size_t photons_shot;
     size_t photon_records;
-    double trace_seconds, gather_seconds;
+    sg_ray_stats rays;         /* of the photon pass                         */
+    double trace_seconds, gather_seconds;  /* 0 for a loaded bake            */
     size_t memory_bytes;       /* the irradiance arrays                      */
-} sg_bake_info;
+    size_t photon_memory_bytes;/* the photon records while baking (freed)    */
+} sg_bake_stats;
 
+/* Traces the photons of d->photons (progress and cancel as in photons.h:
+ * SG_ERR_CANCELLED, nothing kept) and gathers them. */
 sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *d, sg_bake **out, sg_error *err);
+
+/* Gathers a photon map that holds the whole pass of d->photons (pm->blocks
+ * = sg_photon_block_count(&d->photons), else SG_ERR_INVALID_ARG) into a
+ * bake. pm stays the caller's. Equal maps give equal bakes. */
+sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *d, const sg_photon_map *pm,
+                                      sg_bake **out, sg_error *err);
+
 void sg_bake_destroy(sg_bake *b);
-void sg_bake_get_info(const sg_bake *b, sg_bake_info *info);
+void sg_bake_get_stats(const sg_bake *b, sg_bake_stats *stats);
+
+/* d with every zero field replaced by its default (the photon and gather
+ * defaults of photons.h and irradiance.h). */
+sg_bake_desc sg_bake_desc_resolve(const sg_bake_desc *d);
+
+/* The parameters the bake was made with, defaults filled in; threads and
+ * progress fields are 0/NULL. */
+sg_bake_desc sg_bake_get_desc(const sg_bake *b);
+
+/* 64-bit FNV-1a of the parameters that change a bake's values: photon
+ * count, seed, max depth, Russian roulette depth, k, normal_cos and
+ * SG_PHOTON_BLOCK, after defaults (so spelling a default out changes
+ * nothing), as little-endian u64 (normal_cos: its float bits). Threads and
+ * progress do not count: results ignore them. Never 0. */
+uint64_t sg_bake_param_hash(const sg_bake_desc *d);
+
+size_t sg_bake_model_count(const sg_bake *b);
+
+/* Model m's irradiance: 3 floats (RGB, W/m^2) per splat, in the order of
+ * sg_scene_points(sg_world_scene(w, m)); *splats gets the splat count.
+ * Owned by the bake. m < sg_bake_model_count(b). */
+const float *sg_bake_irradiance_data(const sg_bake *b, uint32_t m, size_t *splats);
 
 /* Interpolated irradiance at a hit (RGB, W/m^2). */
 sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h);
@@ -68,5 +105,12 @@ typedef struct sg_bake_frame_desc {
  * the ray escapes. *out is allocated here (sg_image_free). Deterministic. */
 sg_status sg_bake_render(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *d, sg_image *out,
                          double *seconds, sg_error *err);
+
+/* For bake_io.c only: an empty bake (irradiance zeroed) with models and
+ * counts[m] splats per model, desc d (resolved) and stats s; and write
+ * access to model m's irradiance. */
+sg_status sg_bake__new(size_t models, const size_t *counts, const sg_bake_desc *d, const sg_bake_stats *s,
+                       sg_bake **out, sg_error *err);
+float *sg_bake__irradiance(sg_bake *b, uint32_t m);
 
 #endif

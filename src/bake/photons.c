@@ -7,10 +7,18 @@
  * Invariants:
  *  1. a record's flux is finite and >= 0 per channel;
  *  2. record order = (block, photon in block, interaction): a function of
- *     the input only (thread-count independence).
+ *     the input only (thread-count independence), and a map holds exactly
+ *     the records of blocks [0, m->blocks), so extending it block range by
+ *     block range builds the same arrays as one pass;
+ *  3. every array of a map has room for m->capacity >= m->count records;
+ *  4. the progress callback runs on OpenMP thread 0 only (the caller's
+ *     thread), between blocks: never concurrently, never inside a photon.
+ *     The shared photon counter and the stop flag are touched once per
+ *     block with OpenMP atomics; the per-photon loop sees neither.
  */
 #include "bake/photons.h"
 
+#include <assert.h>
 #include <math.h>
 #include <omp.h>
 #include <string.h>
@@ -29,7 +37,8 @@ typedef struct block {
     rec *r;
     size_t n, cap;
     sg_ray_stats rays;
-    int failed;
+    int failed;   /* out of memory: the block is incomplete */
+    int done;     /* every photon of the block was traced   */
 } block;
 
 static int push(block *b, const rec *r)
@@ -99,74 +108,163 @@ static void trace_photon(const sg_world *w, const sg_photon_desc *d, uint64_t i,
     }
 }
 
-sg_status sg_photons_trace(const sg_world *w, const sg_photon_desc *desc, sg_photon_map *out, sg_error *err)
+sg_photon_desc sg_photon_desc_resolve(const sg_photon_desc *desc)
 {
     sg_photon_desc d = desc ? *desc : (sg_photon_desc){0};
     if (d.count == 0) d.count = 1000000;
     if (d.seed == 0) d.seed = 1;
     if (d.max_depth <= 0) d.max_depth = 8;
     if (d.rr_depth <= 0) d.rr_depth = 2;
+    if (d.progress_seconds == 0.0) d.progress_seconds = 0.25;
+    return d;
+}
+
+size_t sg_photon_block_count(const sg_photon_desc *desc)
+{
+    sg_photon_desc d = sg_photon_desc_resolve(desc);
+    return (d.count + SG_PHOTON_BLOCK - 1) / SG_PHOTON_BLOCK;
+}
+
+size_t sg_photon_map_bytes(size_t count) { return count * (12 * sizeof(float) + sizeof(uint32_t)); }
+
+/* Grows every array of m to hold at least need records (invariant 3). On
+ * failure the arrays that did grow stay valid and m->capacity keeps the old
+ * value, which every array still holds. */
+static int reserve(sg_photon_map *m, size_t need)
+{
+    if (need <= m->capacity && m->model)
+        return 1;
+    size_t cap = m->capacity + m->capacity / 2;
+    if (cap < need)
+        cap = need;
+    if (cap == 0)
+        cap = 1;
+    float **arrays[12] = {&m->px, &m->py, &m->pz, &m->nx, &m->ny, &m->nz,
+                          &m->wx, &m->wy, &m->wz, &m->fr, &m->fg, &m->fb};
+    for (int a = 0; a < 12; ++a) {
+        void *p = *arrays[a];
+        if (!p ? !(p = sg_alloc_array(cap, sizeof(float))) : !sg_realloc_array(&p, m->count, cap, sizeof(float)))
+            return 0;
+        *arrays[a] = p;
+    }
+    void *p = m->model;
+    if (!p ? !(p = sg_alloc_array(cap, sizeof(uint32_t))) : !sg_realloc_array(&p, m->count, cap, sizeof(uint32_t)))
+        return 0;
+    m->model = p;
+    m->capacity = cap;
+    return 1;
+}
+
+sg_status sg_photons_trace_more(const sg_world *w, const sg_photon_desc *desc, size_t last_block, sg_photon_map *m,
+                                sg_error *err)
+{
+    assert(w && m && m->count <= m->capacity);
+    sg_photon_desc d = sg_photon_desc_resolve(desc);
     if (d.count > ((size_t)1 << 34))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "photons: %zu photons is too many", d.count);
+    size_t nblocks = sg_photon_block_count(&d);
+    if (last_block > nblocks || last_block < m->blocks)
+        return sg_error_set(err, SG_ERR_INVALID_ARG,
+                            "photons: cannot trace blocks [%zu, %zu) of a pass of %zu blocks", m->blocks,
+                            last_block, nblocks);
     sg_aabb bb = sg_world_bounds(w);
     sg_vec3 centre = sg_v3_scale(sg_v3_add(bb.lo, bb.hi), 0.5f);
     float radius = 0.5f * sg_aabb_diagonal(bb);
     if (!(radius > 0.0f))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "photons: the scene has no extent");
-    size_t nblocks = (d.count + SG_PHOTON_BLOCK - 1) / SG_PHOTON_BLOCK;
-    block *blocks = sg_calloc_array(nblocks, sizeof *blocks);
+    size_t first = m->blocks, n = last_block - first;
+    block *blocks = sg_calloc_array(n, sizeof *blocks);
     if (!blocks)
         return sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory");
     double t0 = omp_get_wtime();
     int threads = d.threads > 0 ? d.threads : omp_get_max_threads();
-    float share = 1.0f / (float)d.count;
+    float share = 1.0f / (float)d.count; /* of the whole pass: chunks do not change it */
+    size_t done_photons = m->shot;        /* shared; atomic updates, one per block */
+    int stop = 0;                         /* shared; set on cancel or failure     */
+    int cancelled = 0;                    /* written by thread 0 only             */
+    double last_call = t0;                /* thread 0 only                        */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (size_t bi = 0; bi < nblocks; ++bi) {
+    for (size_t k = 0; k < n; ++k) {
+        int halt;
+#pragma omp atomic read
+        halt = stop;
+        if (halt)
+            continue;
+        size_t bi = first + k;
         size_t end = (bi + 1) * SG_PHOTON_BLOCK < d.count ? (bi + 1) * SG_PHOTON_BLOCK : d.count;
-        for (size_t i = bi * SG_PHOTON_BLOCK; i < end && !blocks[bi].failed; ++i)
-            trace_photon(w, &d, i, centre, radius, share, &blocks[bi]);
+        for (size_t i = bi * SG_PHOTON_BLOCK; i < end && !blocks[k].failed; ++i)
+            trace_photon(w, &d, i, centre, radius, share, &blocks[k]);
+        if (blocks[k].failed) {
+#pragma omp atomic write
+            stop = 1;
+            continue;
+        }
+        blocks[k].done = 1;
+        size_t now;
+#pragma omp atomic capture
+        now = done_photons += end - bi * SG_PHOTON_BLOCK;
+        /* Invariant 4: only thread 0, the caller's thread, calls back. */
+        if (d.progress && omp_get_thread_num() == 0) {
+            double t = omp_get_wtime();
+            if (d.progress_seconds < 0.0 || t - last_call >= d.progress_seconds) {
+                last_call = t;
+                if (d.progress(d.progress_user, now, d.count)) {
+                    cancelled = 1;
+#pragma omp atomic write
+                    stop = 1;
+                }
+            }
+        }
     }
     sg_status st = SG_OK;
-    sg_photon_map m = {0};
-    size_t total = 0;
-    for (size_t bi = 0; bi < nblocks; ++bi) {
-        if (blocks[bi].failed)
+    size_t prefix = 0, total = m->count;
+    for (size_t k = 0; k < n; ++k)
+        if (blocks[k].failed)
             st = sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for photon records");
-        total += blocks[bi].n;
-        sg_ray_stats_add(&m.rays, &blocks[bi].rays);
-    }
-    float **arrays[12] = {&m.px, &m.py, &m.pz, &m.nx, &m.ny, &m.nz, &m.wx, &m.wy, &m.wz, &m.fr, &m.fg, &m.fb};
+    while (prefix < n && blocks[prefix].done)
+        total += blocks[prefix++].n;
+    if (st == SG_OK && !reserve(m, total))
+        st = sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for %zu records", total);
     if (st == SG_OK) {
-        for (int a = 0; a < 12; ++a)
-            if (!(*arrays[a] = sg_alloc_array(total ? total : 1, sizeof(float))))
-                st = sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for %zu records", total);
-        if (!(m.model = sg_alloc_array(total ? total : 1, sizeof(uint32_t))))
-            st = sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for %zu records", total);
-    }
-    if (st == SG_OK) {
-        size_t k = 0; /* invariant 2: block order */
-        for (size_t bi = 0; bi < nblocks; ++bi)
-            for (size_t j = 0; j < blocks[bi].n; ++j, ++k) {
-                const rec *r = &blocks[bi].r[j];
-                m.px[k] = r->p[0]; m.py[k] = r->p[1]; m.pz[k] = r->p[2];
-                m.nx[k] = r->n[0]; m.ny[k] = r->n[1]; m.nz[k] = r->n[2];
-                m.wx[k] = r->w[0]; m.wy[k] = r->w[1]; m.wz[k] = r->w[2];
-                m.fr[k] = r->f[0]; m.fg[k] = r->f[1]; m.fb[k] = r->f[2];
-                m.model[k] = r->model;
+        size_t j = m->count; /* invariant 2: block order */
+        for (size_t k = 0; k < prefix; ++k) {
+            for (size_t r = 0; r < blocks[k].n; ++r, ++j) {
+                const rec *q = &blocks[k].r[r];
+                m->px[j] = q->p[0]; m->py[j] = q->p[1]; m->pz[j] = q->p[2];
+                m->nx[j] = q->n[0]; m->ny[j] = q->n[1]; m->nz[j] = q->n[2];
+                m->wx[j] = q->w[0]; m->wy[j] = q->w[1]; m->wz[j] = q->w[2];
+                m->fr[j] = q->f[0]; m->fg[j] = q->f[1]; m->fb[j] = q->f[2];
+                m->model[j] = q->model;
             }
-        m.count = total;
-        m.shot = d.count;
-        m.seconds = omp_get_wtime() - t0;
+            sg_ray_stats_add(&m->rays, &blocks[k].rays);
+        }
+        m->count = total;
+        m->blocks = first + prefix;
+        m->shot = m->blocks * SG_PHOTON_BLOCK < d.count ? m->blocks * SG_PHOTON_BLOCK : d.count;
+        m->seconds += omp_get_wtime() - t0;
+        /* The closing report, so a display reaches the end of each call. */
+        if (!cancelled && d.progress && d.progress(d.progress_user, m->shot, d.count))
+            cancelled = 1;
+        if (cancelled)
+            st = sg_error_set(err, SG_ERR_CANCELLED, "photons: cancelled after %zu of %zu photons", m->shot,
+                              d.count);
     }
-    for (size_t bi = 0; bi < nblocks; ++bi)
-        sg_free(blocks[bi].r);
+    for (size_t k = 0; k < n; ++k)
+        sg_free(blocks[k].r);
     sg_free(blocks);
-    if (st != SG_OK) {
+    return st;
+}
+
+sg_status sg_photons_trace(const sg_world *w, const sg_photon_desc *desc, sg_photon_map *out, sg_error *err)
+{
+    sg_photon_map m = {0};
+    sg_status st = sg_photons_trace_more(w, desc, sg_photon_block_count(desc), &m, err);
+    if (st != SG_OK && st != SG_ERR_CANCELLED) {
         sg_photon_map_free(&m);
         return st;
     }
     *out = m;
-    return SG_OK;
+    return st;
 }
 
 void sg_photon_map_free(sg_photon_map *m)

@@ -1,0 +1,371 @@
+/* bake_io.c — bakes and checkpoints in the .sgbake container (layout in
+ * bake_io.h, container in bake_file.h).
+ *
+ * Invariants:
+ *  1. a file's bytes depend only on the scene hash, the resolved
+ *     parameters, the irradiance or records and the ray counts: nothing
+ *     timed and nothing that depends on the thread count goes in, so equal
+ *     bakes are equal files (what makes resume checkable with cmp);
+ *  2. META elements 1..7 hash (sg_bake_param_hash) to the header's
+ *     parameter hash; load refuses a file where they do not;
+ *  3. bytes from a file reach no assert: each value is range-checked and a
+ *     failure is SG_ERR_CORRUPT naming the file, section, model or record;
+ *  4. load builds nothing the caller sees until every check passed: *out is
+ *     written last, on SG_OK only.
+ */
+#include "bake/bake_io.h"
+
+#include <assert.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "bake/bake_file.h"
+#include "core/alloc.h"
+
+enum {
+    META_VERSION = 0, META_COUNT, META_SEED, META_MAX_DEPTH, META_RR_DEPTH, META_K, META_NORMAL_COS,
+    META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */
+};
+#define META_LAYOUT 1u
+
+/* CNTS is read straight into the size_t counts sg_bake__new takes. */
+_Static_assert(sizeof(size_t) == sizeof(uint64_t), "bake_io.c assumes a 64-bit size_t");
+
+static const char *const rec_tags[13] = {"PHPX", "PHPY", "PHPZ", "PHNX", "PHNY", "PHNZ", "PHWX",
+                                         "PHWY", "PHWZ", "PHFR", "PHFG", "PHFB", "PHMD"};
+
+static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, size_t blocks, size_t shot,
+                     size_t records, size_t models, size_t splats, const sg_ray_stats *rays)
+{
+    uint32_t cos_bits;
+    memcpy(&cos_bits, &d->gather.normal_cos, sizeof cos_bits);
+    memset(meta, 0, SG_BAKE_META_COUNT * sizeof *meta);
+    meta[META_VERSION] = META_LAYOUT;
+    meta[META_COUNT] = d->photons.count;
+    meta[META_SEED] = d->photons.seed;
+    meta[META_MAX_DEPTH] = (uint64_t)d->photons.max_depth;
+    meta[META_RR_DEPTH] = (uint64_t)d->photons.rr_depth;
+    meta[META_K] = d->gather.k;
+    meta[META_NORMAL_COS] = cos_bits;
+    meta[META_BLOCK] = SG_PHOTON_BLOCK;
+    meta[META_BLOCKS] = blocks;
+    meta[META_SHOT] = shot;
+    meta[META_RECORDS] = records;
+    meta[META_MODELS] = models;
+    meta[META_SPLATS] = splats;
+    const uint64_t r[6] = {rays->rays, rays->nodes, rays->leaves, rays->isects, rays->splats, rays->hits};
+    memcpy(meta + META_RAYS, r, sizeof r);
+}
+
+static void describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
+{
+    snprintf(buf, size, "photons %zu, seed %" PRIu64 ", max depth %d, rr depth %d, k %u, normal_cos %g, block %" PRIu64,
+             d->photons.count, d->photons.seed, d->photons.max_depth, d->photons.rr_depth, d->gather.k,
+             (double)d->gather.normal_cos, block);
+}
+
+/* Reads and checks META (invariant 2, 3); *d gets the parameters. */
+static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t meta[SG_BAKE_META_COUNT],
+                           sg_bake_desc *d, sg_error *err)
+{
+    const sg_bake_section *s = sg_bake_file_find(f, "META");
+    if (!s)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: no META section", path);
+    if (s->type != SG_BAKE_TYPE_U64 || s->count != SG_BAKE_META_COUNT)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: expected %u u64 values, found %" PRIu64
+                                                 " elements of type %d",
+                            path, SG_BAKE_META_COUNT, s->count, (int)s->type);
+    sg_status st = sg_bake_file_read(f, "META", meta, SG_BAKE_META_COUNT * sizeof *meta, err);
+    if (st != SG_OK)
+        return st;
+    if (meta[META_VERSION] != META_LAYOUT)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: section META: layout %" PRIu64 ", this build reads %u",
+                            path, meta[META_VERSION], META_LAYOUT);
+    uint32_t cos_bits = (uint32_t)meta[META_NORMAL_COS];
+    float normal_cos;
+    memcpy(&normal_cos, &cos_bits, sizeof normal_cos);
+    const char *bad = NULL;
+    if (meta[META_COUNT] < 1 || meta[META_COUNT] > ((uint64_t)1 << 34)) bad = "photon count";
+    else if (meta[META_SEED] == 0) bad = "seed";
+    else if (meta[META_MAX_DEPTH] < 1 || meta[META_MAX_DEPTH] > INT32_MAX) bad = "max depth";
+    else if (meta[META_RR_DEPTH] < 1 || meta[META_RR_DEPTH] > INT32_MAX) bad = "rr depth";
+    else if (meta[META_K] < 1 || meta[META_K] > UINT32_MAX) bad = "k";
+    else if (meta[META_NORMAL_COS] > UINT32_MAX || !(normal_cos >= -1.0f && normal_cos <= 1.0f) ||
+             normal_cos == 0.0f)
+        bad = "normal_cos";
+    else if (meta[META_BLOCK] < 1 || meta[META_BLOCK] > ((uint64_t)1 << 34)) bad = "block size";
+    if (bad)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %s is out of range", path, bad);
+    *d = (sg_bake_desc){.photons = {.count = (size_t)meta[META_COUNT],
+                                    .seed = meta[META_SEED],
+                                    .max_depth = (int)meta[META_MAX_DEPTH],
+                                    .rr_depth = (int)meta[META_RR_DEPTH]},
+                        .gather = {.k = (unsigned)meta[META_K], .normal_cos = normal_cos}};
+    uint64_t h = 0;
+    if (meta[META_BLOCK] == SG_PHOTON_BLOCK)
+        h = sg_bake_param_hash(d);
+    if (h != sg_bake_file_info(f)->param_hash) {
+        if (meta[META_BLOCK] != SG_PHOTON_BLOCK)
+            return sg_error_set(err, SG_ERR_UNSUPPORTED,
+                                "%s: made with photon blocks of %" PRIu64 ", this build traces blocks of %d", path,
+                                meta[META_BLOCK], SG_PHOTON_BLOCK);
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: section META hashes to %016" PRIx64 ", the header says %016" PRIx64, path, h,
+                            sg_bake_file_info(f)->param_hash);
+    }
+    return SG_OK;
+}
+
+/* What is wrong with an irradiance or flux value, or NULL. */
+static const char *not_finite_or_negative(float v)
+{
+    if (isnan(v))
+        return "NaN";
+    if (!isfinite(v))
+        return "infinite";
+    return v < 0.0f ? "negative" : NULL;
+}
+
+sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, sg_error *err)
+{
+    assert(b && path);
+    size_t models = sg_bake_model_count(b);
+    if (models > SG_BAKE_IO_MAX_MODELS)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: %zu models; a bake file holds at most %u", path, models,
+                            SG_BAKE_IO_MAX_MODELS);
+    sg_bake_desc d = sg_bake_get_desc(b);
+    sg_bake_stats stats;
+    sg_bake_get_stats(b, &stats);
+    uint64_t meta[SG_BAKE_META_COUNT];
+    put_meta(meta, &d, sg_photon_block_count(&d.photons), stats.photons_shot, stats.photon_records, models,
+             stats.splats, &stats.rays);
+    uint64_t *counts = sg_alloc_array(models, sizeof *counts);
+    if (!counts)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", path);
+    for (size_t m = 0; m < models; ++m) {
+        size_t n;
+        sg_bake_irradiance_data(b, (uint32_t)m, &n);
+        counts[m] = n;
+    }
+    sg_bake_writer *w = NULL;
+    sg_bake_writer_desc wd = {.path = path, .scene_hash = scene_hash, .param_hash = sg_bake_param_hash(&d),
+                              .max_sections = (uint32_t)models + 2};
+    sg_status st = sg_bake_writer_create(&wd, &w, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_add_section(w, "META", SG_BAKE_TYPE_U64, SG_BAKE_META_COUNT, meta, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_add_section(w, "CNTS", SG_BAKE_TYPE_U64, models, counts, err);
+    for (size_t m = 0; m < models && st == SG_OK; ++m) {
+        char tag[8];
+        snprintf(tag, sizeof tag, "E%03X", (unsigned)m);
+        st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_F32, 3 * counts[m],
+                                        sg_bake_irradiance_data(b, (uint32_t)m, NULL), err);
+    }
+    if (st == SG_OK)
+        st = sg_bake_writer_commit(w, err);
+    sg_bake_writer_destroy(w);
+    sg_free(counts);
+    return st;
+}
+
+sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash, sg_bake **out, sg_error *err)
+{
+    assert(path && w && out);
+    sg_bake_file *f = NULL;
+    sg_bake *b = NULL;
+    uint64_t *counts = NULL;
+    sg_status st = sg_bake_file_open(path, scene_hash, 0, &f, err);
+    if (st != SG_OK)
+        return st;
+    if (sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT) {
+        st = sg_error_set(err, SG_ERR_INVALID_ARG,
+                          "%s: a checkpoint of an unfinished bake, not a bake (resume the bake to finish it)", path);
+        goto done;
+    }
+    uint64_t meta[SG_BAKE_META_COUNT];
+    sg_bake_desc d;
+    if ((st = read_meta(f, path, meta, &d, err)) != SG_OK)
+        goto done;
+    size_t models = sg_world_model_count(w);
+    const sg_bake_section *cs = sg_bake_file_find(f, "CNTS");
+    if (!cs || cs->type != SG_BAKE_TYPE_U64 || cs->count != meta[META_MODELS]) {
+        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section CNTS is %s (META says %" PRIu64 " models)", path,
+                          cs ? "of the wrong type or length" : "missing", meta[META_MODELS]);
+        goto done;
+    }
+    if (cs->count != models) {
+        st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: %" PRIu64 " models in the bake, %zu in the scene", path,
+                          cs->count, models);
+        goto done;
+    }
+    if (!(counts = sg_alloc_array(models, sizeof *counts))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", path);
+        goto done;
+    }
+    if ((st = sg_bake_file_read(f, "CNTS", counts, models * sizeof *counts, err)) != SG_OK)
+        goto done;
+    uint64_t splats = 0;
+    for (size_t m = 0; m < models; ++m) {
+        size_t n = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
+        if (counts[m] != n) {
+            st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: model %zu has %" PRIu64 " splats in the bake, %zu in the scene",
+                              path, m, counts[m], n);
+            goto done;
+        }
+        splats += counts[m];
+    }
+    if (splats != meta[META_SPLATS]) {
+        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %" PRIu64 " splats, CNTS adds up to %" PRIu64, path,
+                          meta[META_SPLATS], splats);
+        goto done;
+    }
+    sg_bake_stats stats = {.photons_shot = (size_t)meta[META_SHOT], .photon_records = (size_t)meta[META_RECORDS],
+                           .rays = {meta[META_RAYS], meta[META_RAYS + 1], meta[META_RAYS + 2],
+                                    meta[META_RAYS + 3], meta[META_RAYS + 4], meta[META_RAYS + 5]}};
+    size_t *sizes = (size_t *)counts; /* u64 as size_t: same width (asserted above) */
+    if ((st = sg_bake__new(models, sizes, &d, &stats, &b, err)) != SG_OK)
+        goto done;
+    for (size_t m = 0; m < models; ++m) {
+        char tag[8];
+        snprintf(tag, sizeof tag, "E%03X", (unsigned)m);
+        const sg_bake_section *s = sg_bake_file_find(f, tag);
+        if (!s || s->type != SG_BAKE_TYPE_F32 || s->count != 3 * counts[m]) {
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s is %s (expected %" PRIu64 " floats)", path, tag,
+                              s ? "of the wrong type or length" : "missing", 3 * counts[m]);
+            goto done;
+        }
+        float *E = sg_bake__irradiance(b, (uint32_t)m);
+        if ((st = sg_bake_file_read(f, tag, E, s->size, err)) != SG_OK)
+            goto done;
+        for (size_t i = 0; i < 3 * counts[m]; ++i) {
+            const char *what = not_finite_or_negative(E[i]);
+            if (what) {
+                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: model %zu, splat %zu: irradiance is %s (%g)", path, m,
+                                  i / 3, what, (double)E[i]);
+                goto done;
+            }
+        }
+    }
+    *out = b;
+    b = NULL;
+done:
+    sg_bake_destroy(b);
+    sg_free(counts);
+    sg_bake_file_close(f);
+    return st;
+}
+
+sg_status sg_bake_checkpoint_save(const char *path, const sg_bake_desc *desc, const sg_photon_map *m,
+                                  uint64_t scene_hash, sg_error *err)
+{
+    assert(path && m);
+    sg_bake_desc d = sg_bake_desc_resolve(desc);
+    uint64_t meta[SG_BAKE_META_COUNT];
+    put_meta(meta, &d, m->blocks, m->shot, m->count, 0, 0, &m->rays);
+    const void *arrays[13] = {m->px, m->py, m->pz, m->nx, m->ny, m->nz, m->wx,
+                              m->wy, m->wz, m->fr, m->fg, m->fb, m->model};
+    sg_bake_writer *w = NULL;
+    sg_bake_writer_desc wd = {.path = path, .scene_hash = scene_hash, .param_hash = sg_bake_param_hash(&d),
+                              .flags = SG_BAKE_FLAG_CHECKPOINT, .max_sections = 14};
+    sg_status st = sg_bake_writer_create(&wd, &w, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_add_section(w, "META", SG_BAKE_TYPE_U64, SG_BAKE_META_COUNT, meta, err);
+    for (int a = 0; a < 13 && st == SG_OK; ++a)
+        st = sg_bake_writer_add_section(w, rec_tags[a], a < 12 ? SG_BAKE_TYPE_F32 : SG_BAKE_TYPE_U32, m->count,
+                                        m->count ? arrays[a] : NULL, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_commit(w, err);
+    sg_bake_writer_destroy(w);
+    return st;
+}
+
+sg_status sg_bake_checkpoint_load(const char *path, const sg_world *w, const sg_bake_desc *desc, uint64_t scene_hash,
+                                  sg_photon_map *out, sg_error *err)
+{
+    assert(path && w && out);
+    sg_bake_desc want = sg_bake_desc_resolve(desc);
+    sg_bake_file *f = NULL;
+    sg_photon_map m = {0};
+    sg_status st = sg_bake_file_open(path, scene_hash, 0, &f, err);
+    if (st != SG_OK)
+        return st;
+    if (!(sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT)) {
+        st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: a finished bake, not a checkpoint", path);
+        goto done;
+    }
+    uint64_t meta[SG_BAKE_META_COUNT];
+    sg_bake_desc d;
+    if ((st = read_meta(f, path, meta, &d, err)) != SG_OK)
+        goto done;
+    if (sg_bake_param_hash(&d) != sg_bake_param_hash(&want)) {
+        char had[200], asked[200];
+        describe(&d, meta[META_BLOCK], had, sizeof had);
+        describe(&want, SG_PHOTON_BLOCK, asked, sizeof asked);
+        st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: made with other bake parameters (%s) than these (%s)", path,
+                          had, asked);
+        goto done;
+    }
+    uint64_t nblocks = sg_photon_block_count(&d.photons), blocks = meta[META_BLOCKS];
+    uint64_t shot = blocks * SG_PHOTON_BLOCK < d.photons.count ? blocks * SG_PHOTON_BLOCK : d.photons.count;
+    if (blocks > nblocks || meta[META_SHOT] != shot || meta[META_MODELS] != 0 || meta[META_SPLATS] != 0) {
+        st = sg_error_set(err, SG_ERR_CORRUPT,
+                          "%s: section META: %" PRIu64 " of %" PRIu64 " blocks done and %" PRIu64
+                          " photons shot do not fit a checkpoint",
+                          path, blocks, nblocks, meta[META_SHOT]);
+        goto done;
+    }
+    uint64_t R = meta[META_RECORDS];
+    for (int a = 0; a < 13; ++a) {
+        const sg_bake_section *s = sg_bake_file_find(f, rec_tags[a]);
+        if (!s || s->type != (a < 12 ? SG_BAKE_TYPE_F32 : SG_BAKE_TYPE_U32) || s->count != R) {
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s is %s (META says %" PRIu64 " records)", path,
+                              rec_tags[a], s ? "of the wrong type or length" : "missing", R);
+            goto done;
+        }
+    }
+    /* R is bounded by the file size now (bake_file.h checked each section). */
+    float **arrays[12] = {&m.px, &m.py, &m.pz, &m.nx, &m.ny, &m.nz, &m.wx, &m.wy, &m.wz, &m.fr, &m.fg, &m.fb};
+    for (int a = 0; a < 12; ++a)
+        if (!(*arrays[a] = sg_alloc_array((size_t)R, sizeof(float)))) {
+            st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %" PRIu64 " photon records", path, R);
+            goto done;
+        }
+    if (!(m.model = sg_alloc_array((size_t)R, sizeof(uint32_t)))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %" PRIu64 " photon records", path, R);
+        goto done;
+    }
+    for (int a = 0; a < 13; ++a) {
+        void *dst = a < 12 ? (void *)*arrays[a] : (void *)m.model;
+        if ((st = sg_bake_file_read(f, rec_tags[a], dst, R * 4, err)) != SG_OK)
+            goto done;
+    }
+    size_t models = sg_world_model_count(w);
+    for (size_t j = 0; j < R; ++j) {
+        const char *what = NULL;
+        for (int a = 0; a < 9 && !what; ++a)
+            if (!isfinite((*arrays[a])[j]))
+                what = "a position, normal or direction is not finite";
+        for (int a = 9; a < 12 && !what; ++a)
+            if (not_finite_or_negative((*arrays[a])[j]))
+                what = "its flux is not finite and >= 0";
+        if (!what && m.model[j] >= models)
+            what = "its model is not in the scene";
+        if (what) {
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: photon record %zu: %s", path, j, what);
+            goto done;
+        }
+    }
+    m.count = m.capacity = (size_t)R;
+    m.blocks = (size_t)blocks;
+    m.shot = (size_t)shot;
+    m.rays = (sg_ray_stats){meta[META_RAYS], meta[META_RAYS + 1], meta[META_RAYS + 2],
+                            meta[META_RAYS + 3], meta[META_RAYS + 4], meta[META_RAYS + 5]};
+    *out = m;
+    memset(&m, 0, sizeof m);
+done:
+    sg_photon_map_free(&m);
+    sg_bake_file_close(f);
+    return st;
+}

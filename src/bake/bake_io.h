@@ -1,0 +1,94 @@
+/* bake_io.h — bakes and photon checkpoints in .sgbake files.
+ *
+ * What it does: writes a finished bake (sg_bake_save) or the photon records
+ * of an unfinished one (sg_bake_checkpoint_save) into the .sgbake container
+ * (bake/bake_file.h: checksummed sections, written to a temporary file and
+ * renamed into place, so a crash or Ctrl-C never leaves half a file), and
+ * reads them back with every value checked against the world it is for.
+ * What it does NOT do: hash the scene (the caller passes
+ * sg_scene_file_hash(sf, SG_SCENE_HASH_BAKE)), store the world, or store
+ * anything that depends on time or thread count: the bytes of a bake file
+ * are a function of the scene hash, the parameters and the records only,
+ * so an interrupted-and-resumed bake compares equal (cmp) to one run
+ * straight through.
+ *
+ * Header hashes: scene hash = the caller's; parameter hash =
+ * sg_bake_param_hash(desc) (bake.h). Loading a bake or a checkpoint made
+ * for another scene fails in sg_bake_file_open with both hashes named.
+ *
+ * Sections of a bake (flags 0):
+ *   META  U64 x 24  the parameters and figures, layout below
+ *   CNTS  U64 x M   splats per model, M = number of models
+ *   Emmm  F32 x 3n  model mmm's irradiance, RGB per splat, W/m^2, in the
+ *                   order of sg_scene_points(sg_world_scene(w, m)); mmm is
+ *                   the model index in 3 upper-case hex digits: "E000",
+ *                   "E001", ... "E00A"; at most SG_BAKE_IO_MAX_MODELS models
+ * Sections of a checkpoint (flags SG_BAKE_FLAG_CHECKPOINT):
+ *   META  U64 x 24  as for a bake; [8] says which blocks are done: the
+ *                   records are those of blocks [0, META[8]) exactly
+ *   PHPX PHPY PHPZ  F32 x R each: record positions (world space)
+ *   PHNX PHNY PHNZ  F32 x R: normals
+ *   PHWX PHWY PHWZ  F32 x R: incoming directions
+ *   PHFR PHFG PHFB  F32 x R: flux, RGB
+ *   PHMD            U32 x R: model index
+ * META, element i (u64; floats as their bits in the low 32 bits):
+ *    0 layout version, 1         8 photon blocks done
+ *    1 photon count              9 photons shot (those of the done blocks)
+ *    2 seed                     10 photon records R
+ *    3 max depth                11 models (0 in a checkpoint)
+ *    4 Russian roulette depth   12 splats, all models (0 in a checkpoint)
+ *    5 k                        13..18 ray stats: rays, nodes, leaves,
+ *    6 normal_cos (f32 bits)           isects, splats, hits
+ *    7 SG_PHOTON_BLOCK          19..23 0
+ * Elements 1..7 hash to the header's parameter hash (checked on load).
+ *
+ * Errors (messages begin with the path):
+ *  SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED  from bake_file.h, and
+ *    SG_ERR_CORRUPT for a META that contradicts the header or itself, a
+ *    value that is not finite or is negative ("x.sgbake: model 0, splat
+ *    17: irradiance is nan"), a record on a model the world lacks;
+ *  SG_ERR_INVALID_ARG  another scene (bake_file.h's message); a model or
+ *    splat count that differs from the world ("x.sgbake: model 1 has 30000
+ *    splats in the bake, 31000 in the scene"); a checkpoint given as a bake
+ *    or the other way round; a checkpoint made with other parameters
+ *    (both sets printed);
+ *  SG_ERR_NOMEM.
+ * Out-parameters are written only on SG_OK; a failed save leaves any file
+ * already at path as it was.
+ *
+ * Thread-safety: no shared state; distinct paths may be used concurrently.
+ */
+#ifndef SG_BAKE_BAKE_IO_H
+#define SG_BAKE_BAKE_IO_H
+
+#include <stdint.h>
+
+#include "bake/bake.h"
+#include "bake/photons.h"
+#include "core/error.h"
+#include "render/world.h"
+
+#define SG_BAKE_IO_MAX_MODELS 4094u /* "E000".."EFFD": 4096 sections minus META and CNTS */
+#define SG_BAKE_META_COUNT 24u      /* u64 elements of META                          */
+
+/* Writes b to path atomically. */
+sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, sg_error *err);
+
+/* Reads the bake at path for world w: checks scene_hash, that the file is a
+ * finished bake, that its model and splat counts are w's, and every value.
+ * *out: release with sg_bake_destroy. */
+sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash, sg_bake **out, sg_error *err);
+
+/* Writes the records of m (blocks [0, m->blocks) of the pass of d) to path
+ * atomically, flagged SG_BAKE_FLAG_CHECKPOINT. */
+sg_status sg_bake_checkpoint_save(const char *path, const sg_bake_desc *d, const sg_photon_map *m,
+                                  uint64_t scene_hash, sg_error *err);
+
+/* Reads a checkpoint made for scene_hash and the parameters of d into *out
+ * (a map to extend with sg_photons_trace_more; free it with
+ * sg_photon_map_free). Checks every record: finite, flux >= 0, model < the
+ * world's model count. seconds is 0 (time is not stored). */
+sg_status sg_bake_checkpoint_load(const char *path, const sg_world *w, const sg_bake_desc *d, uint64_t scene_hash,
+                                  sg_photon_map *out, sg_error *err);
+
+#endif

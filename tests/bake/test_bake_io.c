@@ -1,0 +1,536 @@
+/* test_bake_io.c — bakes and checkpoints in files (bake/bake_io.h), and the
+ * photon pass in block ranges with progress and cancel (bake/photons.h):
+ *  1. save/load round trip: same irradiance bits, same frame, same figures;
+ *  2. a bake for another scene, a truncated or corrupted file, a model or
+ *     splat count that differs from the world, a NaN irradiance, a
+ *     checkpoint given as a bake: each a clean error naming the file;
+ *  3. resume: blocks [0, n/2), checkpoint written and read, then [n/2, n)
+ *     equals the one-pass records bit for bit (also across thread counts),
+ *     and the two bake files are the same bytes;
+ *  4. the progress callback is called, counts up to the total, and a
+ *     nonzero return cancels with the completed prefix kept. */
+#include "test_support.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/bake.h"
+#include "bake/bake_file.h"
+#include "bake/bake_io.h"
+#include "core/alloc.h"
+#include "render/world.h"
+
+static const uint64_t SCENE_HASH = 0x5ce9e0000000001ull;
+
+static const char *tmp_path(const char *name)
+{
+    static char ring[8][1024];
+    static int next;
+    char *p = ring[next++ % 8];
+    snprintf(p, sizeof ring[0], "%s/%s", sg_test_tmpdir(), name);
+    return p;
+}
+
+static sg_world *world_from_json(const char *json)
+{
+    sg_scene_file sf;
+    sg_error err = {0};
+    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
+        fail_msg("scene: %s", err.message);
+    sg_world *w = NULL;
+    if (sg_world_create(&sf, &w, &err) != SG_OK)
+        fail_msg("world: %s", err.message);
+    sg_scene_file_free(&sf);
+    return w;
+}
+
+/* A sphere of `sphere_points` splats over a ground of 3000. */
+static sg_world *small_world(int sphere_points)
+{
+    char json[512];
+    snprintf(json, sizeof json,
+             "{\"models\":[{\"builtin\":\"sphere\",\"points\":%d,\"transform\":{\"translate\":[0,1,0]}},"
+             "{\"builtin\":\"ground\",\"points\":3000}],\"envmap\":{\"builtin\":\"sky\"}}",
+             sphere_points);
+    return world_from_json(json);
+}
+
+static sg_bake_desc bake_desc(size_t photons)
+{
+    return (sg_bake_desc){.photons = {.count = photons, .seed = 7, .max_depth = 6}, .gather = {.k = 32}};
+}
+
+static sg_bake *make_bake(const sg_world *w, size_t photons)
+{
+    sg_bake_desc d = bake_desc(photons);
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    return b;
+}
+
+static void render(const sg_bake *b, const sg_world *w, sg_image *img)
+{
+    sg_bake_frame_desc fd = {.width = 24, .height = 24};
+    if (sg_camera_look_at(sg_v3(0, 2.5f, 4.0f), sg_v3(0, 0.8f, 0), sg_v3(0, 1, 0), 40.0f, 1.0f, &fd.camera, NULL) !=
+        SG_OK)
+        fail_msg("camera");
+    assert_int_equal(sg_bake_render(b, w, &fd, img, NULL, NULL), SG_OK);
+}
+
+static unsigned char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        fail_msg("cannot open %s", path);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    *size = (size_t)n;
+    return buf;
+}
+
+static void write_all(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, size, f), size);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void expect_load_fails(const char *path, const sg_world *w, uint64_t hash, sg_status want, const char *what)
+{
+    sg_bake *b = (sg_bake *)(uintptr_t)1; /* must stay untouched */
+    sg_error err = {0};
+    sg_status st = sg_bake_load(path, w, hash, &b, &err);
+    if (st != want || !strstr(err.message, path) || (what && !strstr(err.message, what)))
+        fail_msg("load %s: got %s \"%s\", expected %s with \"%s\" and the path", path, sg_status_name(st),
+                 err.message, sg_status_name(want), what ? what : "");
+    assert_ptr_equal(b, (sg_bake *)(uintptr_t)1);
+}
+
+static void assert_maps_equal(const sg_photon_map *a, const sg_photon_map *b)
+{
+    if (a->count != b->count || a->blocks != b->blocks || a->shot != b->shot)
+        fail_msg("maps differ: %zu/%zu records, %zu/%zu blocks, %zu/%zu shot", a->count, b->count, a->blocks,
+                 b->blocks, a->shot, b->shot);
+    const float *fa[12] = {a->px, a->py, a->pz, a->nx, a->ny, a->nz, a->wx, a->wy, a->wz, a->fr, a->fg, a->fb};
+    const float *fb[12] = {b->px, b->py, b->pz, b->nx, b->ny, b->nz, b->wx, b->wy, b->wz, b->fr, b->fg, b->fb};
+    for (int k = 0; k < 12; ++k)
+        if (memcmp(fa[k], fb[k], a->count * sizeof(float)) != 0)
+            fail_msg("photon array %d differs", k);
+    assert_memory_equal(a->model, b->model, a->count * sizeof(uint32_t));
+    assert_memory_equal(&a->rays, &b->rays, sizeof a->rays);
+}
+
+/* 1. Save, load: the same irradiance bits, frame, parameters and figures. */
+static void test_bake_io_roundtrip(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(4000);
+    sg_bake *b = make_bake(w, 40000);
+    const char *path = tmp_path("round.sgbake");
+    sg_error err = {0};
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
+    sg_bake *c = NULL;
+    if (sg_bake_load(path, w, SCENE_HASH, &c, &err) != SG_OK)
+        fail_msg("load: %s", err.message);
+    assert_int_equal(sg_bake_model_count(c), sg_world_model_count(w));
+    for (uint32_t m = 0; m < sg_bake_model_count(b); ++m) {
+        size_t nb, nc;
+        const float *eb = sg_bake_irradiance_data(b, m, &nb), *ec = sg_bake_irradiance_data(c, m, &nc);
+        assert_int_equal(nb, nc);
+        assert_memory_equal(eb, ec, 3 * nb * sizeof(float));
+    }
+    sg_image ib, ic;
+    render(b, w, &ib);
+    render(c, w, &ic);
+    assert_memory_equal(ib.data, ic.data, sizeof(float) * 3 * 24 * 24);
+    sg_bake_stats sb, sc;
+    sg_bake_get_stats(b, &sb);
+    sg_bake_get_stats(c, &sc);
+    assert_int_equal(sb.photons_shot, sc.photons_shot);
+    assert_int_equal(sb.photon_records, sc.photon_records);
+    assert_int_equal(sb.splats, sc.splats);
+    assert_memory_equal(&sb.rays, &sc.rays, sizeof sb.rays);
+    sg_bake_desc db = sg_bake_get_desc(b), dc = sg_bake_get_desc(c);
+    assert_int_equal(sg_bake_param_hash(&db), sg_bake_param_hash(&dc));
+    assert_int_equal(dc.photons.count, 40000);
+    assert_int_equal(dc.photons.seed, 7);
+    assert_int_equal(dc.gather.k, 32);
+    /* Saving the loaded bake gives the same bytes (invariant 1). */
+    const char *again = tmp_path("round2.sgbake");
+    assert_int_equal(sg_bake_save(c, again, SCENE_HASH, &err), SG_OK);
+    size_t n1, n2;
+    unsigned char *f1 = read_all(path, &n1), *f2 = read_all(again, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(f1, f2, n1);
+    free(f1);
+    free(f2);
+    sg_image_free(&ib);
+    sg_image_free(&ic);
+    sg_bake_destroy(b);
+    sg_bake_destroy(c);
+    sg_world_destroy(w);
+}
+
+/* Defaults spelt out hash like defaults left 0; threads and progress do
+ * not count; every value parameter does. */
+static void test_bake_io_param_hash(void **state)
+{
+    (void)state;
+    sg_bake_desc zero = {0};
+    sg_bake_desc spelt = {.photons = {.count = 1000000, .seed = 1, .max_depth = 8, .rr_depth = 2, .threads = 3},
+                          .gather = {.k = 64, .normal_cos = 0.7f, .threads = 5}};
+    assert_int_equal(sg_bake_param_hash(&zero), sg_bake_param_hash(&spelt));
+    assert_int_equal(sg_bake_param_hash(NULL), sg_bake_param_hash(&spelt));
+    sg_bake_desc v[6];
+    for (int i = 0; i < 6; ++i)
+        v[i] = spelt;
+    v[0].photons.count = 1000001;
+    v[1].photons.seed = 2;
+    v[2].photons.max_depth = 9;
+    v[3].photons.rr_depth = 3;
+    v[4].gather.k = 65;
+    v[5].gather.normal_cos = 0.71f;
+    for (int i = 0; i < 6; ++i)
+        if (sg_bake_param_hash(&v[i]) == sg_bake_param_hash(&spelt))
+            fail_msg("changing parameter %d leaves the hash", i);
+}
+
+/* 2. Another scene: bake_file's message, naming the file. */
+static void test_bake_io_other_scene(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000);
+    sg_bake *b = make_bake(w, 8192);
+    const char *path = tmp_path("scene.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
+    expect_load_fails(path, w, SCENE_HASH + 1, SG_ERR_INVALID_ARG, "made for another scene");
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* 2. Truncated at every structural boundary and mid-payload, one byte
+ * flipped in a payload, a missing file: clean errors naming the file. */
+static void test_bake_io_truncated_or_corrupt(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000);
+    sg_bake *b = make_bake(w, 8192);
+    const char *path = tmp_path("good.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
+    size_t n;
+    unsigned char *bytes = read_all(path, &n);
+    const size_t cuts[] = {0, 10, 47, 48, 100, n / 2, n - 1};
+    for (size_t i = 0; i < sizeof cuts / sizeof cuts[0]; ++i) {
+        const char *cut = tmp_path("cut.sgbake");
+        write_all(cut, bytes, cuts[i]);
+        expect_load_fails(cut, w, SCENE_HASH, SG_ERR_CORRUPT, NULL);
+    }
+    const char *flipped = tmp_path("flip.sgbake");
+    bytes[n - 5] ^= 0x40; /* inside the last irradiance section */
+    write_all(flipped, bytes, n);
+    expect_load_fails(flipped, w, SCENE_HASH, SG_ERR_CORRUPT, "checksum mismatch");
+    expect_load_fails(tmp_path("missing.sgbake"), w, SCENE_HASH, SG_ERR_IO, NULL);
+    free(bytes);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* 2. A bake loaded into a world whose models have other splat counts, or
+ * another number of models (same scene hash given: the counts are the
+ * check of last resort). */
+static void test_bake_io_splat_count_mismatch(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000), *w2 = small_world(2100);
+    size_t have = sg_scene_points(sg_world_scene(w, 0))->count, want = sg_scene_points(sg_world_scene(w2, 0))->count;
+    assert_true(have != want);
+    sg_bake *b = make_bake(w, 8192);
+    const char *path = tmp_path("count.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
+    char msg[256];
+    snprintf(msg, sizeof msg, "%s: model 0 has %zu splats in the bake, %zu in the scene", path, have, want);
+    expect_load_fails(path, w2, SCENE_HASH, SG_ERR_INVALID_ARG, msg);
+    sg_world *one = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":3000}]}");
+    snprintf(msg, sizeof msg, "%s: 2 models in the bake, 1 in the scene", path);
+    expect_load_fails(path, one, SCENE_HASH, SG_ERR_INVALID_ARG, msg);
+    sg_world_destroy(one);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+    sg_world_destroy(w2);
+}
+
+/* Copies the file at src to dst section by section (fresh CRCs), with
+ * value v written over float element `elem` of section `tag`, and the
+ * header flags given. */
+static void rewrite(const char *src, const char *dst, const char *tag, size_t elem, float v, uint32_t flags)
+{
+    sg_bake_file *f = NULL;
+    sg_error err = {0};
+    if (sg_bake_file_open(src, 0, 0, &f, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    const sg_bake_info *info = sg_bake_file_info(f);
+    sg_bake_writer *wr = NULL;
+    sg_bake_writer_desc wd = {.path = dst, .scene_hash = info->scene_hash, .param_hash = info->param_hash,
+                              .flags = flags, .max_sections = info->section_count};
+    assert_int_equal(sg_bake_writer_create(&wd, &wr, &err), SG_OK);
+    for (uint32_t i = 0; i < info->section_count; ++i) {
+        const sg_bake_section *s = sg_bake_file_section(f, i);
+        unsigned char *buf = malloc(s->size + 1);
+        assert_int_equal(sg_bake_file_read(f, s->tag, buf, s->size, &err), SG_OK);
+        if (!strcmp(s->tag, tag))
+            memcpy(buf + 4 * elem, &v, 4);
+        assert_int_equal(sg_bake_writer_add_section(wr, s->tag, s->type, s->count, buf, &err), SG_OK);
+        free(buf);
+    }
+    assert_int_equal(sg_bake_writer_commit(wr, &err), SG_OK);
+    sg_bake_writer_destroy(wr);
+    sg_bake_file_close(f);
+}
+
+/* 2. Values the checksums cannot catch (a writer's bug): NaN or negative
+ * irradiance, named by model and splat; a checkpoint given as a bake. */
+static void test_bake_io_bad_values(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000);
+    sg_bake *b = make_bake(w, 8192);
+    const char *path = tmp_path("values.sgbake"), *bad = tmp_path("bad.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
+    char msg[256];
+    rewrite(path, bad, "E001", 3 * 17 + 1, NAN, 0);
+    snprintf(msg, sizeof msg, "%s: model 1, splat 17: irradiance is NaN", bad);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, msg);
+    rewrite(path, bad, "E000", 3 * 5, -1.0f, 0);
+    snprintf(msg, sizeof msg, "%s: model 0, splat 5: irradiance is negative", bad);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, msg);
+    rewrite(path, bad, "E000", 0, INFINITY, 0);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "model 0, splat 0: irradiance is infinite");
+    rewrite(path, bad, "none", 0, 0.0f, SG_BAKE_FLAG_CHECKPOINT);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_INVALID_ARG, "a checkpoint of an unfinished bake");
+    /* META that contradicts the header's parameter hash */
+    rewrite(path, bad, "META", 2 * 2, 1.0f, 0); /* low half of the seed */
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section META hashes to");
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* 3. Blocks [0, n/2) on 1 thread, a checkpoint written and read back,
+ * blocks [n/2, n) on 2 threads: the records equal the one-pass map bit for
+ * bit, and the finished bake files are the same bytes. */
+static void test_bake_io_resume_equals_one_pass(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(4000);
+    sg_bake_desc d = bake_desc(100000);
+    size_t nb = sg_photon_block_count(&d.photons);
+    assert_int_equal(nb, 25);
+    sg_error err = {0};
+    sg_photon_map one = {0}, half = {0}, resumed = {0};
+    d.photons.threads = 2;
+    assert_int_equal(sg_photons_trace(w, &d.photons, &one, &err), SG_OK);
+    assert_int_equal(one.blocks, nb);
+    assert_int_equal(one.shot, 100000);
+
+    d.photons.threads = 1;
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb / 2, &half, &err), SG_OK);
+    assert_int_equal(half.blocks, nb / 2);
+    assert_int_equal(half.shot, (nb / 2) * SG_PHOTON_BLOCK);
+    const char *ckpt = tmp_path("resume.sgbake.ckpt");
+    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &half, SCENE_HASH, &err), SG_OK);
+    sg_photon_map_free(&half);
+    if (sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH, &resumed, &err) != SG_OK)
+        fail_msg("checkpoint: %s", err.message);
+    assert_int_equal(resumed.blocks, nb / 2);
+    d.photons.threads = 2;
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb, &resumed, &err), SG_OK);
+    assert_maps_equal(&one, &resumed);
+
+    sg_bake *b1 = NULL, *b2 = NULL;
+    assert_int_equal(sg_bake_create_from_photons(w, &d, &one, &b1, &err), SG_OK);
+    assert_int_equal(sg_bake_create_from_photons(w, &d, &resumed, &b2, &err), SG_OK);
+    const char *p1 = tmp_path("one.sgbake"), *p2 = tmp_path("resumed.sgbake");
+    assert_int_equal(sg_bake_save(b1, p1, SCENE_HASH, &err), SG_OK);
+    assert_int_equal(sg_bake_save(b2, p2, SCENE_HASH, &err), SG_OK);
+    size_t n1, n2;
+    unsigned char *f1 = read_all(p1, &n1), *f2 = read_all(p2, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(f1, f2, n1);
+    /* and sg_bake_create (one call) makes the same bake again */
+    sg_bake *b3 = make_bake(w, 100000);
+    const char *p3 = tmp_path("create.sgbake");
+    assert_int_equal(sg_bake_save(b3, p3, SCENE_HASH, &err), SG_OK);
+    size_t n3;
+    unsigned char *f3 = read_all(p3, &n3);
+    assert_int_equal(n1, n3);
+    assert_memory_equal(f1, f3, n1);
+    /* an incomplete map does not make a bake */
+    sg_photon_map part = {0};
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, 3, &part, &err), SG_OK);
+    sg_bake *none = NULL;
+    assert_int_equal(sg_bake_create_from_photons(w, &d, &part, &none, &err), SG_ERR_INVALID_ARG);
+    assert_null(none);
+    free(f1);
+    free(f2);
+    free(f3);
+    sg_photon_map_free(&part);
+    sg_bake_destroy(b1);
+    sg_bake_destroy(b2);
+    sg_bake_destroy(b3);
+    sg_photon_map_free(&one);
+    sg_photon_map_free(&resumed);
+    sg_world_destroy(w);
+}
+
+/* 2. A checkpoint read with other parameters, for another scene, as a
+ * bake, or damaged: clean errors; a bake read as a checkpoint too. */
+static void test_bake_io_checkpoint_checks(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000);
+    sg_bake_desc d = bake_desc(20000);
+    sg_error err = {0};
+    sg_photon_map m = {0}, out = {0};
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, 2, &m, &err), SG_OK);
+    const char *ckpt = tmp_path("checks.ckpt");
+    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &m, SCENE_HASH, &err), SG_OK);
+    sg_bake_desc other = d;
+    other.photons.seed = 8;
+    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &other, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
+    if (!strstr(err.message, "made with other bake parameters (photons 20000, seed 7,") ||
+        !strstr(err.message, "than these (photons 20000, seed 8,"))
+        fail_msg("message: %s", err.message);
+    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH ^ 1, &out, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "made for another scene"));
+    expect_load_fails(ckpt, w, SCENE_HASH, SG_ERR_INVALID_ARG, "a checkpoint of an unfinished bake");
+    /* a record's flux made negative (with fresh CRCs), then a flipped byte */
+    const char *bad = tmp_path("bad.ckpt");
+    rewrite(ckpt, bad, "PHFG", 3, -2.0f, SG_BAKE_FLAG_CHECKPOINT);
+    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "photon record 3: its flux is not finite and >= 0"));
+    size_t n;
+    unsigned char *bytes = read_all(ckpt, &n);
+    bytes[n - 2] ^= 1;
+    write_all(bad, bytes, n);
+    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, bad));
+    write_all(bad, bytes, n / 3);
+    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    free(bytes);
+    /* a finished bake is not a checkpoint */
+    sg_bake *b = make_bake(w, 20000);
+    const char *bk = tmp_path("checks.sgbake");
+    assert_int_equal(sg_bake_save(b, bk, SCENE_HASH, &err), SG_OK);
+    assert_int_equal(sg_bake_checkpoint_load(bk, w, &d, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "a finished bake, not a checkpoint"));
+    assert_null(out.px);
+    /* an empty checkpoint (Ctrl-C before the first block) loads too */
+    sg_photon_map empty = {0};
+    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &empty, SCENE_HASH, &err), SG_OK);
+    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH, &out, &err), SG_OK);
+    assert_int_equal(out.blocks, 0);
+    assert_int_equal(out.count, 0);
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, 2, &out, &err), SG_OK);
+    assert_maps_equal(&m, &out);
+    sg_photon_map_free(&out);
+    sg_bake_destroy(b);
+    sg_photon_map_free(&m);
+    sg_world_destroy(w);
+}
+
+typedef struct calls {
+    int n;            /* calls so far                          */
+    int cancel_at;    /* return 1 on this call (0: never)      */
+    size_t last;      /* done_photons of the last call         */
+    size_t total;     /* total_photons of the last call        */
+    int decreasing;   /* a call reported fewer than the one before */
+    int off_thread;   /* a call came from an OpenMP thread != 0   */
+} calls;
+
+static int count_calls(void *user, size_t done, size_t total)
+{
+    calls *c = user;
+    c->n++;
+    c->decreasing |= done < c->last;
+    c->off_thread |= omp_get_thread_num() != 0;
+    c->last = done;
+    c->total = total;
+    return c->cancel_at && c->n >= c->cancel_at;
+}
+
+/* 4. Progress after every block, counting up to the total, on thread 0;
+ * cancel keeps the longest completed prefix, which equals the one-pass
+ * map's first records and can be extended to the whole pass. */
+static void test_photons_progress_and_cancel(void **state)
+{
+    (void)state;
+    sg_world *w = small_world(2000);
+    sg_error err = {0};
+    calls c = {0};
+    sg_photon_desc d = {.count = 30 * SG_PHOTON_BLOCK + 100, .seed = 3, .threads = 2, .progress = count_calls,
+                        .progress_user = &c, .progress_seconds = -1.0};
+    sg_photon_map full = {0}, part = {0};
+    assert_int_equal(sg_photons_trace(w, &d, &full, &err), SG_OK);
+    if (c.n < 2 || c.decreasing || c.off_thread || c.last != d.count || c.total != d.count)
+        fail_msg("%d calls, decreasing %d, off thread %d, last %zu of %zu (want %zu)", c.n, c.decreasing,
+                 c.off_thread, c.last, c.total, d.count);
+
+    c = (calls){.cancel_at = 3};
+    sg_status st = sg_photons_trace(w, &d, &part, &err);
+    assert_int_equal(st, SG_ERR_CANCELLED);
+    assert_int_equal(err.status, SG_ERR_CANCELLED);
+    assert_non_null(strstr(err.message, "cancelled after"));
+    assert_true(part.blocks < 31);
+    assert_int_equal(part.shot, part.blocks * SG_PHOTON_BLOCK);
+    size_t prefix = part.count; /* = the records of the full map's first part.blocks blocks */
+    assert_true(prefix <= full.count);
+    assert_memory_equal(part.px, full.px, prefix * sizeof(float));
+    assert_memory_equal(part.fb, full.fb, prefix * sizeof(float));
+    assert_memory_equal(part.model, full.model, prefix * sizeof(uint32_t));
+    /* carry on, without the callback: the whole pass again */
+    d.progress = NULL;
+    assert_int_equal(sg_photons_trace_more(w, &d, sg_photon_block_count(&d), &part, &err), SG_OK);
+    assert_maps_equal(&full, &part);
+    /* a range outside the pass or before the map's end */
+    assert_int_equal(sg_photons_trace_more(w, &d, 5, &part, &err), SG_ERR_INVALID_ARG);
+    assert_int_equal(sg_photons_trace_more(w, &d, 32, &part, &err), SG_ERR_INVALID_ARG);
+    assert_maps_equal(&full, &part);
+    /* a cancel with the default interval still ends the call: the closing
+     * report of a short pass cancels it with everything done */
+    c = (calls){.cancel_at = 1};
+    sg_photon_map tiny = {0};
+    sg_photon_desc dt = {.count = 5000, .progress = count_calls, .progress_user = &c};
+    assert_int_equal(sg_photons_trace(w, &dt, &tiny, &err), SG_ERR_CANCELLED);
+    assert_true(c.n >= 1);
+    assert_true(tiny.blocks <= 2);
+    sg_photon_map_free(&tiny);
+    sg_photon_map_free(&full);
+    sg_photon_map_free(&part);
+    sg_world_destroy(w);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bake_io_roundtrip),
+        cmocka_unit_test(test_bake_io_param_hash),
+        cmocka_unit_test(test_bake_io_other_scene),
+        cmocka_unit_test(test_bake_io_truncated_or_corrupt),
+        cmocka_unit_test(test_bake_io_splat_count_mismatch),
+        cmocka_unit_test(test_bake_io_bad_values),
+        cmocka_unit_test(test_bake_io_resume_equals_one_pass),
+        cmocka_unit_test(test_bake_io_checkpoint_checks),
+        cmocka_unit_test(test_photons_progress_and_cancel),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
