@@ -9,7 +9,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 packages=(
   build-essential cmake pkg-config libcmocka-dev libpng-dev zlib1g-dev
   libopenexr-dev libomp-dev libembree-dev libcjson-dev libglfw3-dev
-  libopencolorio-dev libstb-dev gnuplot-nox xvfb blender-data
+  libopencolorio-dev libstb-dev gnuplot-nox xvfb xauth libgl-dev blender-data
 )
 # node and npm only convert the bunny. A nodejs from another source (e.g.
 # NodeSource) bundles npm and conflicts with Debian's npm package, so ask for

@@ -1,0 +1,70 @@
+/* frame.h — one viewer frame: the bake rendered at a resolution scale,
+ * upscaled to the window and put through the display transform.
+ *
+ * What it does: renders width/scale x height/scale pixels (rounded up) with
+ * sg_bake_render (one primary ray per pixel, the bake's lookup), turns them
+ * into display-referred RGBA8 with sg_display_apply, and upscales the RGBA
+ * to width x height by nearest neighbour: window pixel (x, y) shows low-res
+ * pixel (x / scale, y / scale). The camera is the same at every scale (its
+ * aspect is the window's), so a reduced frame is a blockier version of the
+ * full one; at scale 1 the frame is exactly sg_bake_render's image.
+ * The viewer uses scale 2 or 4 while the camera moves and 1 when it stops.
+ * What it does NOT do: windows or GL (the program does), temporal
+ * accumulation, filtering.
+ *
+ * Layout: linear is the scene-linear frame at the rendered (reduced)
+ * resolution (sg_image layout); rgba is width * height * 4 bytes, R, G, B,
+ * A, row 0 top, stride 4 * width (sg_display_apply's layout).
+ *
+ * Ownership: the frame owns linear and rgba; sg_view_frame_free releases
+ * them. A zeroed sg_view_frame is empty; sg_view_frame_resize (re)allocates.
+ */
+#ifndef SG_VIEW_FRAME_H
+#define SG_VIEW_FRAME_H
+
+#include <stdint.h>
+
+#include "bake/bake.h"
+#include "core/error.h"
+#include "display/ocio.h"
+#include "io/image.h"
+#include "render/camera.h"
+#include "render/world.h"
+
+#define SG_VIEW_MAX_SCALE 16
+
+typedef struct sg_view_frame {
+    int width, height;  /* output size, pixels                              */
+    int scale;          /* scale of the last render (0: nothing rendered)   */
+    sg_image linear;    /* last render, (width/scale) x (height/scale)       */
+    uint8_t *rgba;      /* width x height RGBA8, display-referred            */
+    uint8_t *rgba_low;  /* the render's RGBA8 before upscaling (scale > 1)   */
+    double render_seconds;  /* sg_bake_render of the last frame              */
+    double display_seconds; /* display transform + upscale of the last frame */
+    size_t rays;        /* primary rays of the last frame                    */
+} sg_view_frame;
+
+/* Sets the output size (each in [1, SG_IMAGE_MAX_DIM]) and allocates rgba;
+ * keeps the buffers when the size is unchanged. Forgets the last render. */
+sg_status sg_view_frame_resize(sg_view_frame *f, int width, int height, sg_error *err);
+
+/* Renders cam at 1/scale resolution (scale in [1, SG_VIEW_MAX_SCALE]) into
+ * f->linear and f->rgba. threads: 0 = OpenMP default. */
+sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_world *w, const sg_camera *cam,
+                               int scale, int threads, const sg_display *d, sg_error *err);
+
+/* Re-applies the display (after an exposure change) to the last render. */
+sg_status sg_view_frame_redisplay(sg_view_frame *f, const sg_display *d, sg_error *err);
+
+void sg_view_frame_free(sg_view_frame *f);
+
+/* Writes width x height RGBA8 pixels (layout above; alpha dropped) as an
+ * 8-bit RGB PNG with no colour conversion: the bytes are display-referred
+ * already. Atomic (temporary file + rename). */
+sg_status sg_view_write_png_rgba8(const uint8_t *rgba, int width, int height, const char *path, sg_error *err);
+
+/* Reads an 8-bit RGB or RGBA PNG into RGBA8 (alpha 255 where absent);
+ * *out from malloc (free()). For tests and tools. */
+sg_status sg_view_read_png_rgba8(const char *path, uint8_t **out, int *width, int *height, sg_error *err);
+
+#endif
