@@ -19,6 +19,7 @@
 #include <omp.h>
 #include <string.h>
 
+#include "bake/direct.h"
 #include "core/alloc.h"
 
 static const float INV_PI = 0.318309886183791f;
@@ -40,6 +41,14 @@ sg_bake_desc sg_bake_desc_resolve(const sg_bake_desc *desc)
     /* irradiance.h's defaults, spelt out so the parameter hash sees them */
     if (d.gather.k == 0) d.gather.k = 64;
     if (d.gather.normal_cos == 0.0f) d.gather.normal_cos = 0.7f;
+    if (d.direct_samples == 0) d.direct_samples = 16;
+    if (d.direct_samples < 0) d.direct_samples = -1;
+    /* With direct light computed by shadow rays, photons record only what
+     * arrives after a bounce: direct light is not counted twice. */
+    if (d.direct_samples > 0)
+        d.photons.flags |= SG_PHOTONS_INDIRECT_ONLY;
+    else
+        d.photons.flags &= ~(uint32_t)SG_PHOTONS_INDIRECT_ONLY;
     return d;
 }
 
@@ -64,6 +73,7 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *desc)
     fnv_u64(&h, d.gather.k);
     fnv_u64(&h, cos_bits);
     fnv_u64(&h, SG_PHOTON_BLOCK);
+    fnv_u64(&h, (uint64_t)(int64_t)d.direct_samples);
     return h ? h : 1; /* 0 means "do not check" to bake_file.h */
 }
 
@@ -131,6 +141,10 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
     }
     double t0 = omp_get_wtime();
     if ((st = sg_irradiance_gather(w, pm, &d.gather, &b->E, err)) != SG_OK)
+        goto fail;
+    if (d.direct_samples > 0 &&
+        (st = sg_direct_irradiance_add(w, d.direct_samples, d.photons.seed ^ 0xD1EC7ull, d.gather.threads, b->E,
+                                       err)) != SG_OK)
         goto fail;
     b->stats.gather_seconds = omp_get_wtime() - t0;
     b->stats.trace_seconds = pm->seconds;

@@ -1,9 +1,11 @@
 /* bake.h — baked incident light on the splats, and its lookup.
  *
  * What it does: one photon-style pass from the environment map through the
- * models' hierarchies (bake/photons.h) records where light lands after any
- * number of bounces; a gather (bake/irradiance.h) turns the records into
- * irradiance E at every splat. Looking up a hit interpolates E over the
+ * models' hierarchies (bake/photons.h) records where light lands after one
+ * or more bounces; a gather (bake/irradiance.h) turns the records into
+ * indirect irradiance at every splat, and shadow rays towards the envmap
+ * (bake/direct.h) add the direct irradiance, so E = direct + indirect.
+ * (With direct_samples < 0 the photons carry the direct light too.) Looking up a hit interpolates E over the
  * splats around it with the surface's own MLS weights
  * (sg_scene_hit_weights), so the baked light is as smooth as the surface,
  * and applies the material: L_o = emission + rho(x) / pi * E.
@@ -38,6 +40,10 @@ typedef struct sg_bake sg_bake; /* opaque */
 typedef struct sg_bake_desc {
     sg_photon_desc photons;      /* count, seed, depth (photons.h defaults) */
     sg_irradiance_desc gather;   /* k, normal_cos (irradiance.h defaults)    */
+    int direct_samples;          /* direct light by shadow rays at every splat
+                                    (bake/direct.h), samples per splat per
+                                    strategy; default 16; < 0: none, the
+                                    photons carry the direct light as well   */
 } sg_bake_desc;
 
 /* Figures of a bake. (Not sg_bake_info: that name is the bake file's
@@ -59,7 +65,10 @@ sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *d, sg_bake **out
 
 /* Gathers a photon map that holds the whole pass of d->photons (pm->blocks
  * = sg_photon_block_count(&d->photons), else SG_ERR_INVALID_ARG) into a
- * bake. pm stays the caller's. Equal maps give equal bakes. */
+ * bake, and adds the direct light (d->direct_samples). The map must have
+ * been traced with sg_bake_desc_resolve(d).photons: its flags say whether
+ * photons record direct light. pm stays the caller's. Equal maps give
+ * equal bakes. */
 sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *d, const sg_photon_map *pm,
                                       sg_bake **out, sg_error *err);
 

@@ -26,9 +26,10 @@
 
 enum {
     META_VERSION = 0, META_COUNT, META_SEED, META_MAX_DEPTH, META_RR_DEPTH, META_K, META_NORMAL_COS,
-    META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */
+    META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */,
+    META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */
 };
-#define META_LAYOUT 1u
+#define META_LAYOUT 2u
 
 /* CNTS is read straight into the size_t counts sg_bake__new takes. */
 _Static_assert(sizeof(size_t) == sizeof(uint64_t), "bake_io.c assumes a 64-bit size_t");
@@ -57,6 +58,7 @@ static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, s
     meta[META_SPLATS] = splats;
     const uint64_t r[6] = {rays->rays, rays->nodes, rays->leaves, rays->isects, rays->splats, rays->hits};
     memcpy(meta + META_RAYS, r, sizeof r);
+    meta[META_DIRECT] = (uint64_t)(int64_t)d->direct_samples;
 }
 
 static void describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
@@ -96,13 +98,17 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
              normal_cos == 0.0f)
         bad = "normal_cos";
     else if (meta[META_BLOCK] < 1 || meta[META_BLOCK] > ((uint64_t)1 << 34)) bad = "block size";
+    else if ((int64_t)meta[META_DIRECT] < -1 || (int64_t)meta[META_DIRECT] == 0 ||
+             (int64_t)meta[META_DIRECT] > INT32_MAX)
+        bad = "direct samples";
     if (bad)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %s is out of range", path, bad);
     *d = (sg_bake_desc){.photons = {.count = (size_t)meta[META_COUNT],
                                     .seed = meta[META_SEED],
                                     .max_depth = (int)meta[META_MAX_DEPTH],
                                     .rr_depth = (int)meta[META_RR_DEPTH]},
-                        .gather = {.k = (unsigned)meta[META_K], .normal_cos = normal_cos}};
+                        .gather = {.k = (unsigned)meta[META_K], .normal_cos = normal_cos},
+                        .direct_samples = (int)(int64_t)meta[META_DIRECT]};
     uint64_t h = 0;
     if (meta[META_BLOCK] == SG_PHOTON_BLOCK)
         h = sg_bake_param_hash(d);

@@ -32,15 +32,18 @@
  *   PHFR PHFG PHFB  F32 x R: flux, RGB
  *   PHMD            U32 x R: model index
  * META, element i (u64; floats as their bits in the low 32 bits):
- *    0 layout version, 1         8 photon blocks done
+ *    0 layout version, 2         8 photon blocks done
  *    1 photon count              9 photons shot (those of the done blocks)
  *    2 seed                     10 photon records R
  *    3 max depth                11 models (0 in a checkpoint)
  *    4 Russian roulette depth   12 splats, all models (0 in a checkpoint)
  *    5 k                        13..18 ray stats: rays, nodes, leaves,
  *    6 normal_cos (f32 bits)           isects, splats, hits
- *    7 SG_PHOTON_BLOCK          19..23 0
- * Elements 1..7 hash to the header's parameter hash (checked on load).
+ *    7 SG_PHOTON_BLOCK          19 direct samples per splat (int64;
+ *                                  -1: none, photons carry direct light)
+ *                               20..23 0
+ * Elements 0 is the META layout (2). Elements 1..7 and 19 hash to the
+ * header's parameter hash (checked on load).
  *
  * Errors (messages begin with the path):
  *  SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED  from bake_file.h, and

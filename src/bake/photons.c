@@ -83,7 +83,7 @@ static void trace_photon(const sg_world *w, const sg_photon_desc *d, uint64_t i,
         sg_vec3 n = sg_v3_dot(h.hit.n, wi) < 0.0f ? sg_v3_scale(h.hit.n, -1.0f) : h.hit.n;
         rec r = {{h.hit.p.x, h.hit.p.y, h.hit.p.z}, {n.x, n.y, n.z}, {wi.x, wi.y, wi.z}, {flux.x, flux.y, flux.z},
                  h.model};
-        if (!push(b, &r)) {
+        if ((depth > 0 || !(d->flags & SG_PHOTONS_INDIRECT_ONLY)) && !push(b, &r)) {
             b->failed = 1;
             return;
         }

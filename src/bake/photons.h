@@ -49,12 +49,20 @@
  * blocks already in the map). Return 0 to go on, nonzero to cancel. */
 typedef int (*sg_photon_progress_fn)(void *user, size_t done_photons, size_t total_photons);
 
+enum sg_photon_flags {
+    /* Record only where a photon lands after at least one bounce: the
+     * indirect light, when the direct light is computed another way
+     * (bake/direct.h). The photon is still traced from the envmap. */
+    SG_PHOTONS_INDIRECT_ONLY = 1u << 0
+};
+
 typedef struct sg_photon_desc {
     size_t count;     /* photons shot; default 1,000,000; at most 2^34   */
     uint64_t seed;    /* default 1                                       */
     int max_depth;    /* surface interactions per photon; default 8      */
     int rr_depth;     /* Russian roulette from this bounce; default 2    */
     int threads;      /* 0 = OpenMP default                              */
+    uint32_t flags;   /* sg_photon_flags                                  */
     /* Optional. Called only on the thread that called the trace function
      * (OpenMP thread 0 of the pass: never two calls at once, so it needs
      * no lock), between two blocks, when at least progress_seconds passed

@@ -60,7 +60,10 @@ static sg_world *small_world(int sphere_points)
 
 static sg_bake_desc bake_desc(size_t photons)
 {
-    return (sg_bake_desc){.photons = {.count = photons, .seed = 7, .max_depth = 6}, .gather = {.k = 32}};
+    /* Resolved: a bake's photon pass is traced with the resolved desc (its
+     * flags say whether photons record direct light). */
+    sg_bake_desc d = {.photons = {.count = photons, .seed = 7, .max_depth = 6}, .gather = {.k = 32}};
+    return sg_bake_desc_resolve(&d);
 }
 
 static sg_bake *make_bake(const sg_world *w, size_t photons)

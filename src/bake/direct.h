@@ -1,0 +1,30 @@
+/* direct.h — direct irradiance from the envmap at every splat, by Monte
+ * Carlo with shadow rays (the part of the bake the photon density estimate
+ * does worst: direct light has the sharpest shadows and the brightest
+ * values, and a kNN photon estimate turns them into blotches).
+ *
+ * Estimator at splat centre x with normal n, S samples, two strategies
+ * combined by the power heuristic (Veach 1997):
+ *   envmap sampling:   w ~ p_env,          pdf p_l = sg_envmap_pdf
+ *   cosine sampling:   w ~ cos / pi,       pdf p_c = cos / pi
+ *   E = 1/S sum [ L(w_l) V cos_l  w_l / p_l  +  L(w_c) V cos_c  w_c / p_c ]
+ * with w_x = p_x^2 / (p_l^2 + p_c^2) and V the shadow-ray visibility
+ * (sg_world_spawn_ray from the splat, so the splat's own surface does not
+ * shadow it). Unbiased for E = int L V cos dw over the hemisphere.
+ * Random numbers: sg_rng_float(seed, splat index over all models, 0, dim):
+ * the result ignores the thread count.
+ */
+#ifndef SG_BAKE_DIRECT_H
+#define SG_BAKE_DIRECT_H
+
+#include <stdint.h>
+
+#include "core/error.h"
+#include "render/world.h"
+
+/* Adds the direct irradiance (RGB per splat) to E[m] for every model m
+ * (E as sg_irradiance_gather makes it). samples >= 1. */
+sg_status sg_direct_irradiance_add(const sg_world *w, int samples, uint64_t seed, int threads, float **E,
+                                   sg_error *err);
+
+#endif
