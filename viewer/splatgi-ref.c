@@ -11,6 +11,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "core/cli.h"
 #include "io/image.h"
 #include "io/scene_file.h"
 #include "ref/pathtrace.h"
@@ -39,14 +40,11 @@ static int fail(const char *msg)
 
 static int parse_int(const char *opt, const char *s, long lo, long hi, long *out)
 {
-    char *end;
-    errno = 0;
-    long v = strtol(s ? s : "", &end, 10);
-    if (!s || errno || *end || end == s || v < lo || v > hi) {
-        fprintf(stderr, "splatgi-ref: %s: '%s' is not an integer in [%ld, %ld]\n", opt, s ? s : "", lo, hi);
+    sg_error e;
+    if (sg_cli_long(opt, s, lo, hi, out, &e) != SG_OK) {
+        fprintf(stderr, "splatgi-ref: %s\n", e.message);
         return 0;
     }
-    *out = v;
     return 1;
 }
 

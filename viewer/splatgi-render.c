@@ -17,6 +17,7 @@
 
 #include "bake/bake.h"
 #include "bake/bake_io.h"
+#include "core/cli.h"
 #include "io/image.h"
 #include "io/scene_file.h"
 #include "render/camera.h"
@@ -100,48 +101,20 @@ static int fail(const char *fmt, ...)
 
 static int parse_long(const char *opt, const char *s, long lo, long hi, long *out)
 {
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi) {
-        char range[64];
-        snprintf(range, sizeof range, "an integer in [%ld, %ld]", lo, hi);
-        fprintf(stderr, "splatgi-render: %s: '%s' is not %s\n", opt, s, range);
-        return 0;
-    }
-    *out = v;
-    return 1;
+    sg_error e;
+    return sg_cli_long(opt, s, lo, hi, out, &e) == SG_OK ? 1 : (fail("%s", e.message), 0);
 }
 
 static int parse_float(const char *opt, const char *s, float lo, float *out)
 {
-    char *end;
-    errno = 0;
-    float v = strtof(s, &end);
-    if (errno || end == s || *end || !isfinite(v) || !(v > lo)) {
-        fprintf(stderr, "splatgi-render: %s: '%s' is not a number > %g\n", opt, s, (double)lo);
-        return 0;
-    }
-    *out = v;
-    return 1;
+    sg_error e;
+    return sg_cli_float_above(opt, s, lo, out, &e) == SG_OK ? 1 : (fail("%s", e.message), 0);
 }
 
 static int parse_vec3(const char *opt, const char *s, sg_vec3 *out)
 {
-    float v[3];
-    const char *p = s;
-    for (int i = 0; i < 3; i++) {
-        char *end;
-        errno = 0;
-        v[i] = strtof(p, &end);
-        if (errno || end == p || !isfinite(v[i]) || (i < 2 ? *end != ',' : *end != '\0')) {
-            fprintf(stderr, "splatgi-render: %s: '%s' is not x,y,z\n", opt, s);
-            return 0;
-        }
-        p = end + 1;
-    }
-    *out = sg_v3(v[0], v[1], v[2]);
-    return 1;
+    sg_error e;
+    return sg_cli_vec3(opt, s, out, &e) == SG_OK ? 1 : (fail("%s", e.message), 0);
 }
 
 /* Returns 0 to go on, 1 for an error, 2 after --help. */

@@ -21,6 +21,7 @@
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
 
+#include "core/cli.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
 #include "display/ocio.h"
@@ -92,15 +93,8 @@ static int fail(const char *fmt, ...)
 
 static int parse_long(const char *opt, const char *s, long lo, long hi, long *out)
 {
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi) {
-        fprintf(stderr, "splatgi-view: %s: '%s' is not an integer in [%ld, %ld]\n", opt, s, lo, hi);
-        return 0;
-    }
-    *out = v;
-    return 1;
+    sg_error e;
+    return sg_cli_long(opt, s, lo, hi, out, &e) == SG_OK ? 1 : (fail("%s", e.message), 0);
 }
 
 /* Returns 0 to go on, 1 for an error, 2 after --help. */
