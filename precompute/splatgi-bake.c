@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "bake/bake.h"
+#include "bake/bake_file.h"
 #include "bake/bake_io.h"
 #include "io/scene_file.h"
 #include "render/world.h"
@@ -30,6 +31,8 @@ static const char usage[] =
     "  --seed S          random seed (default 1)\n"
     "  --max-depth D     surface interactions per photon (default 8)\n"
     "  --threads T       OpenMP threads (default: all); results do not depend on it\n"
+    "  --if-stale        do nothing when OUT already holds a bake of this scene with\n"
+    "                    these parameters and this format (checked by its header)\n"
     "  --resume          continue from OUT.ckpt, left by an interrupted run with the\n"
     "                    same scene and options\n"
     "  --help\n"
@@ -51,6 +54,7 @@ typedef struct options {
     sg_bake_desc desc;
     int threads;
     int resume;
+    int if_stale;   /* --if-stale: keep an OUT made for this scene and these parameters */
 } options;
 
 typedef struct progress {
@@ -135,6 +139,8 @@ static int parse_args(int argc, char **argv, options *o)
             return 2;
         } else if (!strcmp(a, "--resume")) {
             o->resume = 1;
+        } else if (!strcmp(a, "--if-stale")) {
+            o->if_stale = 1;
         } else if (!strcmp(a, "-o") || !strcmp(a, "--out")) {
             if (!v)
                 return fprintf(stderr, "splatgi-bake: %s needs a value\n", a), 1;
@@ -227,6 +233,22 @@ int main(int argc, char **argv)
         goto done;
     }
     uint64_t scene_hash = sg_scene_file_hash(&sf, SG_SCENE_HASH_BAKE);
+    if (o.if_stale && !o.resume) {
+        /* The header's scene and parameter hashes say whether OUT is this
+         * bake; the parameter hash covers every value that changes it. */
+        sg_bake_file *f = NULL;
+        sg_error e2 = {0};
+        if (sg_bake_file_open(o.out, scene_hash, sg_bake_param_hash(&d), &f, &e2) == SG_OK &&
+            !(sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT)) {
+            sg_bake_file_close(f);
+            printf("splatgi-bake: %s is up to date\n", o.out);
+            rc = 0;
+            goto done;
+        }
+        sg_bake_file_close(f);
+        if (stat(o.out, &stbuf) == 0)
+            printf("splatgi-bake: %s is stale (%s): baking again\n", o.out, e2.message);
+    }
     if (sg_world_create(&sf, &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
