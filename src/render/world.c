@@ -145,13 +145,25 @@ void sg_world_destroy(sg_world *w)
     sg_free(w);
 }
 
+/* Per-model counters are summed, but a world query is one ray and at
+ * most one hit, whatever the number of models it traverses. */
+static void add_world_stats(sg_ray_stats *stats, sg_ray_stats *local, int found)
+{
+    if (!stats)
+        return;
+    local->rays = 1;
+    local->hits = (uint64_t)found;
+    sg_ray_stats_add(stats, local);
+}
+
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats)
 {
     sg_ray r = *ray;
+    sg_ray_stats local = {0};
     int found = 0;
     for (size_t i = 0; i < w->count; ++i) {
         sg_hit hit;
-        if (sg_scene_intersect(w->scenes[i], &r, &hit, stats)) {
+        if (sg_scene_intersect(w->scenes[i], &r, &hit, stats ? &local : NULL)) {
             h->hit = hit;
             h->model = (uint32_t)i;
             r.tmax = hit.t; /* invariant 2 */
@@ -162,15 +174,18 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
         h->hit.splat = SG_INVALID_ID;
         h->model = 0;
     }
+    add_world_stats(stats, &local, found);
     return found;
 }
 
 int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats)
 {
-    for (size_t i = 0; i < w->count; ++i)
-        if (sg_scene_occluded(w->scenes[i], ray, stats))
-            return 1;
-    return 0;
+    sg_ray_stats local = {0};
+    int found = 0;
+    for (size_t i = 0; i < w->count && !found; ++i)
+        found = sg_scene_occluded(w->scenes[i], ray, stats ? &local : NULL);
+    add_world_stats(stats, &local, found);
+    return found;
 }
 
 sg_ray sg_world_spawn_ray(const sg_world *w, const sg_world_hit *h, sg_vec3 dir, float tmax)

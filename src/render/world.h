@@ -42,7 +42,9 @@ sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err
 /* NULL is a no-op. */
 void sg_world_destroy(sg_world *w);
 
-/* Nearest hit over all models in [tmin, tmax]; 0 on a miss. */
+/* Nearest hit over all models in [tmin, tmax]; 0 on a miss. stats (may be
+ * NULL) counts one ray (and at most one hit) per call, and the traversal
+ * counters of every model it visits. */
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats);
 
 /* 1 if any model is hit in [tmin, tmax]. */
