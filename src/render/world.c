@@ -3,7 +3,9 @@
  * Invariants:
  *  1. scenes[i] and materials[i] belong to scene-file model i;
  *  2. the nearest hit over models is found by shrinking the ray's tmax to
- *     the best hit so far, so each later model only reports nearer hits.
+ *     the best hit so far, so each later model only reports nearer hits;
+ *     models are visited in the order their boxes are entered, so the
+ *     search stops at the first box that starts beyond the best hit.
  */
 #include "render/world.h"
 
@@ -22,6 +24,7 @@ struct sg_world {
     sg_material *materials;  /* one material per model             */
     sg_envmap *env;
     sg_aabb bounds;
+    sg_aabb *model_bounds;   /* each model's support box, for culling    */
 };
 
 static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_pointset *out, sg_error *err)
@@ -103,7 +106,8 @@ sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err
     sg_status st = SG_OK;
     w->scenes = sg_calloc_array(sf->model_count, sizeof *w->scenes);
     w->materials = sg_calloc_array(sf->model_count, sizeof *w->materials);
-    if (!w->scenes || !w->materials) {
+    w->model_bounds = sg_calloc_array(sf->model_count, sizeof *w->model_bounds);
+    if (!w->scenes || !w->materials || !w->model_bounds) {
         st = sg_error_set(err, SG_ERR_NOMEM, "world: out of memory for %zu models", sf->model_count);
         goto fail;
     }
@@ -123,6 +127,7 @@ sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err
         sg_scene_info info;
         sg_scene_get_info(w->scenes[i], &info);
         w->bounds = sg_aabb_union(w->bounds, info.bounds);
+        w->model_bounds[i] = info.bounds;
     }
     if ((st = make_envmap(&sf->env, &w->env, err)) != SG_OK)
         goto fail;
@@ -141,6 +146,7 @@ void sg_world_destroy(sg_world *w)
         sg_scene_destroy(w->scenes[i]);
     sg_free(w->scenes);
     sg_free(w->materials);
+    sg_free(w->model_bounds);
     sg_envmap_destroy(w->env);
     sg_free(w);
 }
@@ -156,12 +162,57 @@ static void add_world_stats(sg_ray_stats *stats, sg_ray_stats *local, int found)
     sg_ray_stats_add(stats, local);
 }
 
+/* Where the ray enters box b, or INFINITY when it misses it within
+ * [tmin, tmax]. Written so that a NaN from 0 * inf loses every comparison. */
+static float box_entry(const sg_aabb *b, const sg_ray *r)
+{
+    const float o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z};
+    const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+    float t0 = r->tmin, t1 = r->tmax;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0f) {
+            if (o[a] < lo[a] || o[a] > hi[a])
+                return INFINITY;
+            continue;
+        }
+        float inv = 1.0f / d[a], ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
+        if (ta > tb) {
+            float t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (ta > t0) t0 = ta;
+        if (tb < t1) t1 = tb;
+    }
+    return t0 <= t1 ? t0 : INFINITY;
+}
+
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats)
 {
+    enum { SORTED_MAX = 16 };
     sg_ray r = *ray;
     sg_ray_stats local = {0};
     int found = 0;
-    for (size_t i = 0; i < w->count; ++i) {
+    /* Visit the models in the order the ray enters their boxes, and stop
+     * at the first whose box starts beyond the nearest hit so far: with a
+     * large ground and a model on it, most rays traverse only one. */
+    size_t order[SORTED_MAX];
+    float entry[SORTED_MAX];
+    size_t n = w->count <= SORTED_MAX ? w->count : 0;
+    for (size_t i = 0; i < n; ++i) {
+        float e = box_entry(&w->model_bounds[i], &r);
+        size_t j = i;
+        for (; j > 0 && entry[j - 1] > e; --j) {
+            entry[j] = entry[j - 1];
+            order[j] = order[j - 1];
+        }
+        entry[j] = e;
+        order[j] = i;
+    }
+    for (size_t k = 0; k < w->count; ++k) {
+        size_t i = n ? order[k] : k;
+        if (n && !(entry[k] <= r.tmax))
+            break; /* sorted: every later box starts farther */
         sg_hit hit;
         if (sg_scene_intersect(w->scenes[i], &r, &hit, stats ? &local : NULL)) {
             h->hit = hit;
