@@ -1,0 +1,722 @@
+/* bench_view — the walkthrough viewer's frame time: mean and 95th
+ * percentile over a recorded camera path, per model size, resolution and
+ * bake material (issue "The interactive walkthrough viewer").
+ *
+ * Scene: the Stanford dragon sampled to each size (default 32k, 125k, 1M,
+ * 4M points), scaled to SCENE_LENGTH units along its longest side and
+ * standing on y = 0 (as bench_ref), on the builtin ground (Lambert 0.5),
+ * under courtyard.exr (the builtin "sky" when absent). Two materials for
+ * the dragon: "diffuse" (Lambert, albedo 0.7) and "glossy" (GGX, albedo
+ * 0.7, roughness 0.3, specular 0.04). The bake looks a glossy lobe up as
+ * if diffuse (bake.h: no directional bins yet), so both cost the same per
+ * lookup; the glossy rows measure that, and will change when the bake
+ * learns glossy lobes. Each (size, material) is its own world (the
+ * material lives in the world) and its own bake (--photons, --direct).
+ *
+ * Camera path: made here, deterministically, and written as a campath file
+ * (view/campath.h) to out/bench_view/path.txt so `splatgi-view --path`
+ * replays it; the scene files go next to it (out/bench_view/dragon_N_M.json).
+ * 60 keys: 24 orbiting the dragon low (eye y = 3, radius 16), 24 orbiting
+ * high (eye y = 10, radius 20), 12 on a close pass in front of the dragon.
+ * Sizes >= --big-size (default 1M) walk every --big-stride-th key only
+ * (default 2; stated in the output), to keep the full run within minutes
+ * on 2 cores; --quick walks every 6th key.
+ *
+ * Frame: sg_view_frame_render at scale 1 (what the viewer does per still
+ * frame: sg_bake_render + OCIO display transform to RGBA8, view.h), the
+ * display made as the viewer makes it (the config's default display and
+ * view, exposure 0). One warm-up frame (the first key), then every key
+ * once, each timed with omp_get_wtime; mean and 95th percentile (nearest
+ * rank) of those times; also the mean render (lookup) and display parts.
+ *
+ * Output: a table on stdout, DIR/bench_view.csv and DIR/bench_view.md
+ * (written to a temporary name and renamed).
+ */
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "bake/bake.h"
+#include "display/ocio.h"
+#include "io/mesh.h"
+#include "io/scene_file.h"
+#include "render/camera.h"
+#include "render/world.h"
+#include "view/campath.h"
+#include "view/frame.h"
+
+#define DEFAULT_MESH SG_SHARED_DATA_DIR "/meshes/stanford_dragon/dragon_vrip.ply"
+#define DEFAULT_ENVMAP SG_SHARED_DATA_DIR "/envmaps/blender_studiolights/courtyard.exr"
+#define PATH_DIR "out/bench_view"
+#define SCENE_LENGTH 10.0f
+#define FOV_DEG 40.0f
+#define DRAGON_ALBEDO 0.7f
+#define GROUND_ALBEDO 0.5f
+#define GGX_ROUGHNESS 0.3f
+#define GGX_SPECULAR 0.04f
+#define MAX_SIZES 8
+#define N_RES 2
+#define N_MAT 2
+#define KEY_SECONDS 0.1 /* path time between keys */
+
+static const int res_w[N_RES] = {512, 1024};
+static const int res_h[N_RES] = {512, 768};
+static const char *const mat_name[N_MAT] = {"diffuse", "glossy"};
+
+static const char usage[] =
+    "usage: bench_view [options]\n"
+    "Viewer frame time (mean, p95) along a camera path on the Stanford dragon.\n"
+    "  --mesh PATH       mesh to sample (default " DEFAULT_MESH ")\n"
+    "  --envmap PATH     lat-long EXR (default courtyard.exr; builtin sky if absent)\n"
+    "  --sizes A,B,...   point counts (default 32000,125000,1000000,4000000)\n"
+    "  --quick           32000 points, every 6th key (< 1 min)\n"
+    "  --photons N       bake photons (default 500000)\n"
+    "  --direct N        bake direct_samples (default 8)\n"
+    "  --big-size N      sizes >= N walk every --big-stride-th key (default 1000000)\n"
+    "  --big-stride K    (default 2; quick: every size, 6)\n"
+    "  --threads N       OpenMP threads (default: all)\n"
+    "  --out-dir DIR     CSV and markdown folder (default docs)\n"
+    "  --help            this text\n";
+
+typedef struct options {
+    const char *mesh, *envmap, *out_dir;
+    size_t sizes[MAX_SIZES];
+    int size_count, quick, threads, direct, big_stride;
+    size_t photons, big_size;
+} options;
+
+typedef struct row {
+    size_t points;
+    int mat;
+    size_t splats;             /* all models                           */
+    double world_s, bake_s, trace_s, gather_s;
+    int width, height, frames, stride;
+    double mean_ms, p95_ms, min_ms, max_ms, render_ms, display_ms, fps;
+} row;
+
+typedef struct report {
+    const options *o;
+    const char *machine, *env_used;
+    int nproc;
+    double load0[3], load1[3];
+    size_t keys;
+    const row *rows;
+    int nrows;
+} report;
+
+static int fail(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+static int fail(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "bench_view: ");
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, "\n");
+    va_end(ap);
+    return 1;
+}
+
+static int parse_size(const char *s, unsigned long long lo, unsigned long long hi, size_t *out)
+{
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        return 0;
+    *out = (size_t)v;
+    return 1;
+}
+
+static int parse_sizes(const char *s, options *o)
+{
+    o->size_count = 0;
+    while (*s) {
+        char *end;
+        errno = 0;
+        unsigned long long v = strtoull(s, &end, 10);
+        if (errno || end == s || v < 100 || v > 100000000ull || o->size_count == MAX_SIZES)
+            return 0;
+        o->sizes[o->size_count++] = (size_t)v;
+        if (*end == ',')
+            end++;
+        else if (*end)
+            return 0;
+        s = end;
+    }
+    return o->size_count > 0;
+}
+
+/* Returns -1 to continue, else the exit status. */
+static int parse_options(int argc, char **argv, options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->mesh = DEFAULT_MESH;
+    o->envmap = DEFAULT_ENVMAP;
+    o->out_dir = "docs";
+    o->photons = 500000;
+    o->direct = 8;
+    for (int i = 1; i < argc; i++)
+        if (strcmp(argv[i], "--quick") == 0)
+            o->quick = 1;
+    o->big_size = o->quick ? 100 : 1000000;
+    o->big_stride = o->quick ? 6 : 2;
+    parse_sizes(o->quick ? "32000" : "32000,125000,1000000,4000000", o);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        size_t n;
+        if (strcmp(a, "--help") == 0) {
+            fputs(usage, stdout);
+            return 0;
+        } else if (strcmp(a, "--quick") == 0)
+            continue;
+        if (!v)
+            return fail("%s needs a value (see --help)", a);
+        i++;
+        if (strcmp(a, "--mesh") == 0)
+            o->mesh = v;
+        else if (strcmp(a, "--envmap") == 0)
+            o->envmap = v;
+        else if (strcmp(a, "--out-dir") == 0)
+            o->out_dir = v;
+        else if (strcmp(a, "--sizes") == 0) {
+            if (!parse_sizes(v, o))
+                return fail("--sizes '%s': want up to %d counts >= 100, comma-separated", v, MAX_SIZES);
+        } else if (strcmp(a, "--photons") == 0) {
+            if (!parse_size(v, 1000, 1ull << 34, &o->photons))
+                return fail("--photons '%s': want 1000..2^34", v);
+        } else if (strcmp(a, "--direct") == 0) {
+            if (!parse_size(v, 0, 4096, &n))
+                return fail("--direct '%s': want 0..4096", v);
+            o->direct = n == 0 ? -1 : (int)n;
+        } else if (strcmp(a, "--big-size") == 0) {
+            if (!parse_size(v, 1, 1000000000ull, &o->big_size))
+                return fail("--big-size '%s': want a point count", v);
+        } else if (strcmp(a, "--big-stride") == 0) {
+            if (!parse_size(v, 1, 60, &n))
+                return fail("--big-stride '%s': want 1..60", v);
+            o->big_stride = (int)n;
+        } else if (strcmp(a, "--threads") == 0) {
+            if (!parse_size(v, 1, 4096, &n))
+                return fail("--threads '%s': want 1..4096", v);
+            o->threads = (int)n;
+        } else
+            return fail("unknown option %s (see --help)", a);
+    }
+    if (o->threads == 0)
+        o->threads = omp_get_max_threads();
+    return -1;
+}
+
+/* ---- machine and files ------------------------------------------------ */
+
+static void cpu_model(char *out, size_t cap)
+{
+    snprintf(out, cap, "unknown");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f)
+        return;
+    char line[512];
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "model name", 10) != 0)
+            continue;
+        const char *c = strchr(line, ':');
+        if (!c)
+            continue;
+        c++;
+        while (*c == ' ' || *c == '\t')
+            c++;
+        snprintf(out, cap, "%s", c);
+        out[strcspn(out, "\r\n")] = '\0';
+        break;
+    }
+    fclose(f);
+}
+
+static void load_avg(double l[3])
+{
+    l[0] = l[1] = l[2] = NAN;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f)
+        return;
+    if (fscanf(f, "%lf %lf %lf", &l[0], &l[1], &l[2]) != 3)
+        l[0] = l[1] = l[2] = NAN;
+    fclose(f);
+}
+
+static int make_dirs(const char *path)
+{
+    char buf[4096];
+    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
+        return 0;
+    for (char *p = buf + 1;; p++) {
+        if (*p == '/' || *p == '\0') {
+            char c = *p;
+            *p = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+                return 0;
+            *p = c;
+            if (c == '\0')
+                break;
+        }
+    }
+    return 1;
+}
+
+typedef void (*writer_fn)(FILE *f, const void *ctx);
+static int write_file(const char *path, writer_fn fn, const void *ctx)
+{
+    char tmp[4096];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid()) >= (int)sizeof tmp)
+        return fail("%s: path too long", path);
+    FILE *f = fopen(tmp, "w");
+    if (!f)
+        return fail("%s: cannot open: %s", tmp, strerror(errno));
+    fn(f, ctx);
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad) {
+        remove(tmp);
+        return fail("%s: write failed", tmp);
+    }
+    if (rename(tmp, path) != 0) {
+        remove(tmp);
+        return fail("%s: cannot rename to %s: %s", tmp, path, strerror(errno));
+    }
+    return 0;
+}
+
+static void write_text(FILE *f, const void *ctx)
+{
+    fputs((const char *)ctx, f);
+}
+
+static int json_escape(const char *s, char *out, size_t cap)
+{
+    size_t k = 0;
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        char tmp[8];
+        int n = c == '"' || c == '\\' ? snprintf(tmp, sizeof tmp, "\\%c", c)
+                : c < 0x20            ? snprintf(tmp, sizeof tmp, "\\u%04x", c)
+                                      : snprintf(tmp, sizeof tmp, "%c", c);
+        if (k + (size_t)n + 1 > cap)
+            return 0;
+        memcpy(out + k, tmp, (size_t)n);
+        k += (size_t)n;
+    }
+    out[k] = '\0';
+    return 1;
+}
+
+/* ---- scene and path ---------------------------------------------------- */
+
+typedef struct scene_setup {
+    float scale;
+    sg_vec3 translate;
+    sg_aabb world_box;
+    int have_envmap;
+} scene_setup;
+
+static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
+{
+    sg_mesh m = {0};
+    sg_status st = sg_mesh_read(o->mesh, &m, err);
+    if (st != SG_OK)
+        return st;
+    sg_aabb b = sg_aabb_empty();
+    for (size_t i = 0; i < m.vertex_count; i++)
+        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
+    sg_mesh_free(&m);
+    sg_vec3 ext = sg_v3_sub(b.hi, b.lo);
+    float longest = fmaxf(ext.x, fmaxf(ext.y, ext.z));
+    if (!(longest > 0.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: empty or degenerate bounds", o->mesh);
+    s->scale = SCENE_LENGTH / longest;
+    s->translate = sg_v3(-s->scale * 0.5f * (b.lo.x + b.hi.x), -s->scale * b.lo.y,
+                         -s->scale * 0.5f * (b.lo.z + b.hi.z));
+    s->world_box.lo = sg_v3_add(sg_v3_scale(b.lo, s->scale), s->translate);
+    s->world_box.hi = sg_v3_add(sg_v3_scale(b.hi, s->scale), s->translate);
+    s->have_envmap = access(o->envmap, R_OK) == 0;
+    return SG_OK;
+}
+
+static int scene_json(const options *o, const scene_setup *s, size_t points, int mat, char *out, size_t cap)
+{
+    char mesh[2048], env[2048], envpart[2200], material[256];
+    if (!json_escape(o->mesh, mesh, sizeof mesh) || !json_escape(o->envmap, env, sizeof env))
+        return 0;
+    if (s->have_envmap)
+        snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
+    else
+        snprintf(envpart, sizeof envpart, "{\"builtin\": \"sky\"}");
+    if (mat == 0)
+        snprintf(material, sizeof material,
+                 "{\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}",
+                 (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO);
+    else
+        snprintf(material, sizeof material,
+                 "{\"type\": \"ggx\", \"albedo\": [%g, %g, %g], \"roughness\": %g, \"specular\": %g,"
+                 " \"use_point_colors\": false}",
+                 (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO, (double)GGX_ROUGHNESS,
+                 (double)GGX_SPECULAR);
+    int n = snprintf(out, cap,
+                     "{\"models\": [\n"
+                     "  {\"path\": \"%s\", \"points\": %zu,\n"
+                     "   \"transform\": {\"translate\": [%.9g, %.9g, %.9g], \"scale\": %.9g},\n"
+                     "   \"material\": %s},\n"
+                     "  {\"builtin\": \"ground\",\n"
+                     "   \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}],\n"
+                     " \"envmap\": %s,\n"
+                     " \"cameras\": [{\"name\": \"main\", \"eye\": [0, 3, 16], \"look\": [0, %.4g, 0], \"up\": [0, 1, 0],"
+                     " \"fov_deg\": %g}],\n"
+                     " \"render\": {\"width\": 512, \"height\": 512}}\n",
+                     mesh, points, (double)s->translate.x, (double)s->translate.y, (double)s->translate.z,
+                     (double)s->scale, material, (double)GROUND_ALBEDO, (double)GROUND_ALBEDO,
+                     (double)GROUND_ALBEDO, envpart, (double)(0.4f * s->world_box.hi.y), (double)FOV_DEG);
+    return n > 0 && (size_t)n < cap;
+}
+
+/* The path of the file's head comment, around world_box (centred in x, z,
+ * standing on y = 0). */
+static sg_status make_path(const scene_setup *s, sg_campath *p, sg_error *err)
+{
+    const float pi = 3.14159265f;
+    float h = s->world_box.hi.y;
+    sg_vec3 target = sg_v3(0.0f, 0.4f * h, 0.0f);
+    size_t k = 0;
+    for (int ring = 0; ring < 2; ring++) {
+        float radius = ring == 0 ? 16.0f : 20.0f, y = ring == 0 ? 3.0f : 10.0f;
+        for (int i = 0; i < 24; i++, k++) {
+            float a = 2.0f * pi * (float)i / 24.0f + (ring ? pi / 24.0f : 0.0f);
+            sg_campath_key key = {.time = KEY_SECONDS * (double)k,
+                                  .view = {.eye = sg_v3(radius * sinf(a), y, radius * cosf(a)),
+                                           .look = target, .up = sg_v3(0, 1, 0), .fov_deg = FOV_DEG}};
+            sg_status st = sg_campath_append(p, &key, err);
+            if (st != SG_OK)
+                return st;
+        }
+    }
+    /* Close pass: along x in front of the dragon (z = front + 3), looking
+     * at the part of the dragon straight ahead. */
+    float zf = s->world_box.hi.z + 3.0f;
+    for (int i = 0; i < 12; i++, k++) {
+        float t = (float)i / 11.0f;
+        float x = -7.0f + 14.0f * t;
+        sg_campath_key key = {.time = KEY_SECONDS * (double)k,
+                              .view = {.eye = sg_v3(x, 0.6f * h, zf),
+                                       .look = sg_v3(0.6f * x, 0.45f * h, 0.0f), .up = sg_v3(0, 1, 0),
+                                       .fov_deg = FOV_DEG}};
+        sg_status st = sg_campath_append(p, &key, err);
+        if (st != SG_OK)
+            return st;
+    }
+    return SG_OK;
+}
+
+/* ---- measuring ----------------------------------------------------------- */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, const sg_campath *p, int stride,
+                      int threads, row *r, sg_error *err)
+{
+    sg_view_frame f = {0};
+    size_t n = (p->count + (size_t)stride - 1) / (size_t)stride;
+    double *t = malloc(n * sizeof *t);
+    if (!t)
+        return sg_error_set(err, SG_ERR_NOMEM, "frame times");
+    sg_status st = sg_view_frame_resize(&f, r->width, r->height, err);
+    float aspect = (float)r->width / (float)r->height;
+    sg_camera cam;
+    /* Warm-up: the first key, untimed. */
+    if (st == SG_OK)
+        st = sg_campath_camera(&p->keys[0], aspect, &cam, err);
+    if (st == SG_OK)
+        st = sg_view_frame_render(&f, b, w, &cam, 1, threads, d, err);
+    double render = 0, display = 0;
+    size_t m = 0;
+    for (size_t i = 0; i < p->count && st == SG_OK; i += (size_t)stride) {
+        st = sg_campath_camera(&p->keys[i], aspect, &cam, err);
+        if (st != SG_OK)
+            break;
+        double t0 = omp_get_wtime();
+        st = sg_view_frame_render(&f, b, w, &cam, 1, threads, d, err);
+        t[m++] = omp_get_wtime() - t0;
+        render += f.render_seconds;
+        display += f.display_seconds;
+    }
+    if (st == SG_OK) {
+        double sum = 0;
+        for (size_t i = 0; i < m; i++)
+            sum += t[i];
+        qsort(t, m, sizeof *t, cmp_double);
+        size_t rank = (size_t)ceil(0.95 * (double)m); /* nearest rank, 1-based */
+        r->frames = (int)m;
+        r->stride = stride;
+        r->mean_ms = 1e3 * sum / (double)m;
+        r->p95_ms = 1e3 * t[rank > 0 ? rank - 1 : 0];
+        r->min_ms = 1e3 * t[0];
+        r->max_ms = 1e3 * t[m - 1];
+        r->render_ms = 1e3 * render / (double)m;
+        r->display_ms = 1e3 * display / (double)m;
+        r->fps = 1e3 / r->mean_ms;
+    }
+    free(t);
+    sg_view_frame_free(&f);
+    return st;
+}
+
+/* ---- output ------------------------------------------------------------- */
+
+static void write_csv(FILE *f, const void *ctx)
+{
+    const report *rp = ctx;
+    fputs("points,material,width,height,frames,key_stride,mean_ms,p95_ms,min_ms,max_ms,render_ms,display_ms,"
+          "mean_fps,splats,world_s,bake_s,trace_s,gather_s,photons,direct_samples,threads,envmap,machine\n",
+          f);
+    for (int i = 0; i < rp->nrows; i++) {
+        const row *r = &rp->rows[i];
+        fprintf(f, "%zu,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%zu,%.2f,%.2f,%.2f,%.2f,%zu,%d,%d,\"%s\",\"%s\"\n",
+                r->points, mat_name[r->mat], r->width, r->height, r->frames, r->stride, r->mean_ms, r->p95_ms,
+                r->min_ms, r->max_ms, r->render_ms, r->display_ms, r->fps, r->splats, r->world_s, r->bake_s,
+                r->trace_s, r->gather_s, rp->o->photons, rp->o->direct, rp->o->threads, rp->env_used,
+                rp->machine);
+    }
+}
+
+static const row *find_row(const report *rp, size_t points, int mat, int width)
+{
+    for (int i = 0; i < rp->nrows; i++)
+        if (rp->rows[i].points == points && rp->rows[i].mat == mat && rp->rows[i].width == width)
+            return &rp->rows[i];
+    return NULL;
+}
+
+static void write_md(FILE *f, const void *ctx)
+{
+    const report *rp = ctx;
+    const options *o = rp->o;
+    fprintf(f, "# Viewer frame time\n\n"
+               "Machine: %s, %d cores, %d OpenMP threads; load average %.2f at the start, %.2f at the end. "
+               "Made by `scripts/bench-view.sh` (bench/bench_view.c).\n\n",
+            rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0]);
+    fprintf(f, "Scene: the Stanford dragon sampled to N points, %g units long, standing on the builtin ground, "
+               "under `%s`. Bakes: %zu photons, direct_samples %d; *diffuse* = Lambert albedo %g, *glossy* = GGX "
+               "albedo %g, roughness %g, specular %g. **The bake looks a glossy lobe up as if diffuse** "
+               "(bake.h: no directional bins yet), so a glossy lookup costs what a diffuse one does: the glossy "
+               "rows differ from the diffuse ones by noise only.\n\n",
+            (double)SCENE_LENGTH, rp->env_used, o->photons, o->direct, (double)DRAGON_ALBEDO,
+            (double)DRAGON_ALBEDO, (double)GGX_ROUGHNESS, (double)GGX_SPECULAR);
+    fprintf(f, "Path: %zu keys (24 orbiting low, 24 orbiting high, 12 on a close pass), written to "
+               "`" PATH_DIR "/path.txt` with the scene files `" PATH_DIR "/dragon_N_MATERIAL.json`; replay "
+               "with `splatgi-bake " PATH_DIR "/dragon_1000000_diffuse.json -o d.sgbake && splatgi-view "
+               PATH_DIR "/dragon_1000000_diffuse.json --bake d.sgbake --path " PATH_DIR "/path.txt`. "
+               "Sizes >= %zu walk every %d-th key only (column *frames*). "
+               "Frame = `sg_view_frame_render` at scale 1 (`sg_bake_render`, one primary ray per pixel and the "
+               "bake's lookup, then the OCIO display transform to RGBA8, default display and view), timed "
+               "with `omp_get_wtime` after one warm-up frame; p95 = nearest-rank 95th percentile; render and "
+               "display = the frame's two parts (means).\n\n",
+            rp->keys, o->big_size, o->big_stride);
+    fputs("| points | material | size | frames | mean ms | p95 ms | mean fps | render ms | display ms | min ms | "
+          "max ms |\n|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+          f);
+    for (int i = 0; i < rp->nrows; i++) {
+        const row *r = &rp->rows[i];
+        fprintf(f, "| %zu | %s | %dx%d | %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", r->points,
+                mat_name[r->mat], r->width, r->height, r->frames, r->mean_ms, r->p95_ms, r->fps, r->render_ms,
+                r->display_ms, r->min_ms, r->max_ms);
+    }
+    fputs("\n## Build and bake\n\n| points | material | splats (all models) | world build s | bake s | trace s | "
+          "gather + direct s |\n|---:|---|---:|---:|---:|---:|---:|\n",
+          f);
+    for (int i = 0; i < rp->nrows; i++) {
+        const row *r = &rp->rows[i];
+        if (r->width != res_w[0])
+            continue;
+        fprintf(f, "| %zu | %s | %zu | %.1f | %.1f | %.1f | %.1f |\n", r->points, mat_name[r->mat], r->splats,
+                r->world_s, r->bake_s, r->trace_s, r->gather_s);
+    }
+    fputs("\n## Targets (issue: 1M points, diffuse bake)\n\n", f);
+    const row *a = find_row(rp, 1000000, 0, 512), *b = find_row(rp, 1000000, 0, 1024);
+    if (a)
+        fprintf(f, "- 512x512: >= 30 fps mean: measured %.1f fps (%.1f ms) — %s.\n", a->fps, a->mean_ms,
+                a->fps >= 30.0 ? "met" : "NOT met");
+    if (b)
+        fprintf(f, "- 1024x768: >= 15 fps mean: measured %.1f fps (%.1f ms) — %s.\n", b->fps, b->mean_ms,
+                b->fps >= 15.0 ? "met" : "NOT met");
+    if (!a && !b)
+        fputs("- not measured (no 1000000-point run).\n", f);
+}
+
+static void print_row(const row *r)
+{
+    printf("%8zu %-8s %4dx%-4d %6d %8.1f %8.1f %7.1f %9.1f %9.1f %7.1f %7.1f\n", r->points, mat_name[r->mat],
+           r->width, r->height, r->frames, r->mean_ms, r->p95_ms, r->fps, r->render_ms, r->display_ms, r->min_ms,
+           r->max_ms);
+}
+
+static void print_head(void)
+{
+    printf("%8s %-8s %9s %6s %8s %8s %7s %9s %9s %7s %7s\n", "points", "material", "size", "frames", "mean ms",
+           "p95 ms", "fps", "render ms", "disp ms", "min ms", "max ms");
+}
+
+/* ---- main ---------------------------------------------------------------- */
+
+int main(int argc, char **argv)
+{
+    options o;
+    int rc = parse_options(argc, argv, &o);
+    if (rc >= 0)
+        return rc;
+    if (access(o.mesh, R_OK) != 0) {
+        printf("bench_view: skipped: mesh %s not found (pass --mesh PATH)\n", o.mesh);
+        return 0;
+    }
+    omp_set_num_threads(o.threads);
+
+    char machine[256];
+    cpu_model(machine, sizeof machine);
+    report rp = {.o = &o, .machine = machine, .nproc = (int)sysconf(_SC_NPROCESSORS_ONLN)};
+    load_avg(rp.load0);
+    printf("bench_view: machine %s, nproc %d, omp_get_max_threads %d, threads %d, load %.2f%s\n", machine,
+           rp.nproc, omp_get_max_threads(), o.threads, rp.load0[0], o.quick ? " (quick)" : "");
+
+    sg_error err;
+    scene_setup setup = {0};
+    if (setup_scene(&o, &setup, &err) != SG_OK)
+        return fail("%s", err.message);
+    rp.env_used = setup.have_envmap ? o.envmap : "builtin sky (envmap file not found)";
+
+    sg_campath path = {0};
+    if (make_path(&setup, &path, &err) != SG_OK)
+        return fail("path: %s", err.message);
+    rp.keys = path.count;
+    if (!make_dirs(PATH_DIR))
+        return fail("cannot create %s: %s", PATH_DIR, strerror(errno));
+    if (sg_campath_write(&path, PATH_DIR "/path.txt", &err) != SG_OK)
+        return fail("%s", err.message);
+    printf("bench_view: envmap %s; bake %zu photons, direct_samples %d; path %zu keys -> %s\n", rp.env_used,
+           o.photons, o.direct, path.count, PATH_DIR "/path.txt");
+
+    sg_display *disp = NULL;
+    sg_display_desc dd = {.exposure_stops = 0.0f, .threads = o.threads};
+    if (sg_display_create(&dd, &disp, &err) != SG_OK)
+        return fail("display: %s", err.message);
+    sg_display_info di;
+    sg_display_get_info(disp, &di);
+    printf("bench_view: display %s / %s (config %s)\n", di.display, di.view, di.config_from);
+
+    static row rows[MAX_SIZES * N_MAT * N_RES];
+    int nrows = 0, status = 0;
+    static char json[16384];
+    for (int si = 0; si < o.size_count && status == 0; si++) {
+        size_t n = o.sizes[si];
+        int stride = n >= o.big_size ? o.big_stride : 1;
+        for (int mat = 0; mat < N_MAT && status == 0; mat++) {
+            sg_scene_file sf = {0};
+            sg_world *w = NULL;
+            sg_bake *b = NULL;
+            char jpath[512];
+            snprintf(jpath, sizeof jpath, PATH_DIR "/dragon_%zu_%s.json", n, mat_name[mat]);
+            if (!scene_json(&o, &setup, n, mat, json, sizeof json)) {
+                status = fail("scene JSON too long");
+                break;
+            }
+            write_file(jpath, write_text, json);
+            if (sg_scene_file_parse(json, strlen(json), jpath, NULL, &sf, &err) != SG_OK) {
+                status = fail("%s", err.message);
+                break;
+            }
+            double t0 = omp_get_wtime();
+            if (sg_world_create(&sf, &w, &err) != SG_OK) {
+                sg_scene_file_free(&sf);
+                status = fail("%zu points: %s", n, err.message);
+                break;
+            }
+            double world_s = omp_get_wtime() - t0;
+            size_t splats = 0;
+            for (uint32_t m = 0; m < sg_world_model_count(w); m++) {
+                sg_scene_info info;
+                sg_scene_get_info(sg_world_scene(w, m), &info);
+                splats += info.splat_count;
+            }
+            printf("\n%zu points, %s: world %.1f s (%zu splats); ", n, mat_name[mat], world_s, splats);
+            fflush(stdout);
+            sg_bake_desc bd = {.photons = {.count = o.photons, .threads = o.threads}, .direct_samples = o.direct};
+            t0 = omp_get_wtime();
+            if (sg_bake_create(w, &bd, &b, &err) != SG_OK) {
+                status = fail("%zu points: bake: %s", n, err.message);
+                goto next;
+            }
+            double bake_s = omp_get_wtime() - t0;
+            sg_bake_stats bs;
+            sg_bake_get_stats(b, &bs);
+            printf("bake %.1f s (trace %.1f, gather + direct %.1f)\n", bake_s, bs.trace_seconds,
+                   bake_s - bs.trace_seconds);
+            print_head();
+            for (int ri = 0; ri < N_RES; ri++) {
+                row *r = &rows[nrows];
+                memset(r, 0, sizeof *r);
+                *r = (row){.points = n, .mat = mat, .splats = splats, .world_s = world_s, .bake_s = bake_s,
+                           .trace_s = bs.trace_seconds, .gather_s = bake_s - bs.trace_seconds,
+                           .width = res_w[ri], .height = res_h[ri]};
+                if (walk(b, w, disp, &path, stride, o.threads, r, &err) != SG_OK) {
+                    status = fail("%zu points: frame: %s", n, err.message);
+                    goto next;
+                }
+                print_row(r);
+                fflush(stdout);
+                nrows++;
+            }
+        next:
+            sg_bake_destroy(b);
+            sg_world_destroy(w);
+            sg_scene_file_free(&sf);
+        }
+    }
+    load_avg(rp.load1);
+    rp.rows = rows;
+    rp.nrows = nrows;
+
+    printf("\nsummary (%s, %d threads, load %.2f -> %.2f)\n", machine, o.threads, rp.load0[0], rp.load1[0]);
+    print_head();
+    for (int i = 0; i < nrows; i++)
+        print_row(&rows[i]);
+    const row *a = find_row(&rp, 1000000, 0, 512), *bb = find_row(&rp, 1000000, 0, 1024);
+    if (a)
+        printf("target 1M diffuse 512x512 >= 30 fps: %.1f fps (%s)\n", a->fps, a->fps >= 30 ? "met" : "NOT met");
+    if (bb)
+        printf("target 1M diffuse 1024x768 >= 15 fps: %.1f fps (%s)\n", bb->fps, bb->fps >= 15 ? "met" : "NOT met");
+
+    if (nrows > 0 && make_dirs(o.out_dir)) {
+        char p[4200];
+        snprintf(p, sizeof p, "%s/bench_view.csv", o.out_dir);
+        if (write_file(p, write_csv, &rp) == 0)
+            printf("bench_view: wrote %s\n", p);
+        else
+            status = 1;
+        snprintf(p, sizeof p, "%s/bench_view.md", o.out_dir);
+        if (write_file(p, write_md, &rp) == 0)
+            printf("bench_view: wrote %s\n", p);
+        else
+            status = 1;
+    }
+    sg_display_destroy(disp);
+    sg_campath_free(&path);
+    return status;
+}
