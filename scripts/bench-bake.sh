@@ -5,8 +5,9 @@
 #
 # Full run (no arguments, or any bench_bake options except --quick):
 #   docs/bench_bake.csv, docs/bench_bake.md, docs/bake_error_time.png. About
-#   10 minutes on 2 cores the first time (the two converged references take
-#   about 4 of them; they are cached under out/ref_cache/ and reused).
+#   8 minutes on 2 quiet cores the first time (the two converged references
+#   take 2.5 of them; they are cached under out/ref_cache/ and reused),
+#   about 5.5 after; half as fast again when others share the cores.
 # Smoke test (--quick: 32k points, small images, < 1 min): the same files
 #   under out/, so the measured tables in docs/ are not overwritten.
 # Skips with exit 0 when the dragon mesh is missing; draws no chart (and
