@@ -353,7 +353,11 @@ int main(int argc, char **argv)
     printf("  %-18s %zu photons in %.2f s (%.3f Mphotons/s); the pass: %zu records, %.2f M rays\n", "trace",
            traced, t_trace, t_trace > 0 ? (double)traced / t_trace * 1e-6 : 0.0, records,
            (double)bs.rays.rays * 1e-6);
-    printf("  %-18s k = %u, normal_cos = %g, %.2f s\n", "gather", d.gather.k, (double)d.gather.normal_cos, t_gather);
+    printf("  %-18s k = %u, normal_cos = %g, %.2f s\n", "gather", d.gather.k, (double)d.gather.normal_cos,
+           t_gather - bs.direct_seconds);
+    if (d.direct_samples > 0)
+        printf("  %-18s %d + %d shadow rays per splat, %.2f s\n", "direct light", d.direct_samples, d.direct_samples,
+               bs.direct_seconds);
     printf("  %-18s %.2f s\n", "write", t_write);
     printf("  %-18s %.2f s (world %.2f s)\n", "total", omp_get_wtime() - t_start, t_world);
     printf("  %-18s %.1f MiB (freed before the write)\n", "photon records", mib(bs.photon_memory_bytes));

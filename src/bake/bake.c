@@ -142,10 +142,12 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
     double t0 = omp_get_wtime();
     if ((st = sg_irradiance_gather(w, pm, &d.gather, &b->E, err)) != SG_OK)
         goto fail;
+    double t1 = omp_get_wtime();
     if (d.direct_samples > 0 &&
         (st = sg_direct_irradiance_add(w, d.direct_samples, d.photons.seed ^ 0xD1EC7ull, d.gather.threads, b->E,
                                        err)) != SG_OK)
         goto fail;
+    b->stats.direct_seconds = omp_get_wtime() - t1;
     b->stats.gather_seconds = omp_get_wtime() - t0;
     b->stats.trace_seconds = pm->seconds;
     b->stats.photons_shot = pm->shot;

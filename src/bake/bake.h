@@ -54,7 +54,10 @@ typedef struct sg_bake_stats {
     size_t photons_shot;
     size_t photon_records;
     sg_ray_stats rays;         /* of the photon pass                         */
-    double trace_seconds, gather_seconds;  /* 0 for a loaded bake            */
+    double trace_seconds, gather_seconds;  /* 0 for a loaded bake; gather
+                                              includes the direct light    */
+    double direct_seconds;     /* the shadow rays of the direct light (part
+                                  of gather_seconds); 0 for a loaded bake    */
     size_t memory_bytes;       /* the irradiance arrays                      */
     size_t photon_memory_bytes;/* the photon records while baking (freed)    */
 } sg_bake_stats;
