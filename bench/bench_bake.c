@@ -64,6 +64,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bench_common.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
 #include "bake/photons.h"
@@ -423,28 +424,6 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- machine and files (as bench_ref.c) --------------------------------- */
 
-static void cpu_model(char *out, size_t cap)
-{
-    snprintf(out, cap, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) != 0)
-            continue;
-        const char *c = strchr(line, ':');
-        if (!c)
-            continue;
-        c++;
-        while (*c == ' ' || *c == '\t')
-            c++;
-        snprintf(out, cap, "%s", c);
-        out[strcspn(out, "\r\n")] = '\0';
-        break;
-    }
-    fclose(f);
-}
 
 /* The first three fields of /proc/loadavg: others' work on the cores. */
 static char rp_load[2][64];
@@ -460,73 +439,9 @@ static void load_avg(char *out, size_t cap)
     fclose(f);
 }
 
-static int make_dirs(const char *path)
-{
-    char buf[4096];
-    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
-        return 0;
-    for (char *p = buf + 1;; p++) {
-        if (*p == '/' || *p == '\0') {
-            char c = *p;
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return 0;
-            *p = c;
-            if (c == '\0')
-                break;
-        }
-    }
-    return 1;
-}
 
-typedef void (*writer_fn)(FILE *f, const void *ctx);
-static int write_file(const char *path, writer_fn fn, const void *ctx)
-{
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid()) >= (int)sizeof tmp)
-        return fail("%s: path too long", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return fail("%s: cannot open: %s", tmp, strerror(errno));
-    fn(f, ctx);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) {
-        remove(tmp);
-        return fail("%s: write failed", tmp);
-    }
-    if (rename(tmp, path) != 0) {
-        remove(tmp);
-        return fail("%s: cannot rename to %s: %s", tmp, path, strerror(errno));
-    }
-    return 0;
-}
 
-static int json_escape(const char *s, char *out, size_t cap)
-{
-    size_t k = 0;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        char tmp[8];
-        int n = c == '"' || c == '\\' ? snprintf(tmp, sizeof tmp, "\\%c", c)
-                : c < 0x20            ? snprintf(tmp, sizeof tmp, "\\u%04x", c)
-                                      : snprintf(tmp, sizeof tmp, "%c", c);
-        if (k + (size_t)n + 1 > cap)
-            return 0;
-        memcpy(out + k, tmp, (size_t)n);
-        k += (size_t)n;
-    }
-    out[k] = '\0';
-    return 1;
-}
 
-static uint64_t mix_file(uint64_t key, const char *path)
-{
-    struct stat st;
-    if (!path || stat(path, &st) != 0)
-        return sg_mix64(key ^ 0x5bd1e995u);
-    key = sg_mix64(key ^ (uint64_t)st.st_size);
-    return sg_mix64(key ^ (uint64_t)st.st_mtime);
-}
 
 static const char *rel_path(const char *p, char *buf, size_t cap)
 {
@@ -589,7 +504,7 @@ static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
 static int scene_json(const options *o, const scene_setup *s, size_t points, char *out, size_t cap)
 {
     char mesh[2048], env[2048], envpart[2200];
-    if (!json_escape(o->mesh, mesh, sizeof mesh) || !json_escape(o->envmap, env, sizeof env))
+    if (!bench_json_escape(o->mesh, mesh, sizeof mesh) || !bench_json_escape(o->envmap, env, sizeof env))
         return 0;
     if (s->have_envmap)
         snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
@@ -679,8 +594,8 @@ static uint64_t ref_key(sg_scene_file *sf, int size, int spp, uint32_t version)
     sf->render.seed = REF_SEED;
     sf->render.max_depth = MAX_DEPTH;
     uint64_t key = sg_scene_file_hash(sf, SG_SCENE_HASH_ALL);
-    key = mix_file(key, sf->models[0].path);
-    key = mix_file(key, sf->env.path);
+    key = bench_mix_file(key, sf->models[0].path);
+    key = bench_mix_file(key, sf->env.path);
     return sg_mix64(key ^ version);
 }
 
@@ -724,7 +639,7 @@ static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, cons
     ci->paths = ref->paths;
     ci->cached = 0;
     sg_error werr;
-    if (!make_dirs(o->cache_dir))
+    if (!bench_make_dirs(o->cache_dir))
         fprintf(stderr, "bench_bake: warning: cannot create %s: %s\n", o->cache_dir, strerror(errno));
     else if (sg_image_write_exr(&ref->mean, ci->path, &werr) != SG_OK ||
              sg_image_write_exr(&ref->std_error, se_path, &werr) != SG_OK)
@@ -1410,7 +1325,7 @@ int main(int argc, char **argv)
     omp_set_num_threads(o.threads);
     double t_start = omp_get_wtime();
     char machine[256];
-    cpu_model(machine, sizeof machine);
+    bench_cpu_model(machine, sizeof machine);
     int nproc = (int)sysconf(_SC_NPROCESSORS_ONLN);
     printf("bench_bake: machine %s, nproc %d, omp_get_max_threads %d, threads %d%s\n", machine, nproc,
            omp_get_max_threads(), o.threads, o.quick ? " (quick)" : "");
@@ -1428,7 +1343,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < o.n_ks; i++)
         printf(" %zu", o.ks[i]);
     printf("\n");
-    if (!make_dirs(o.bake_dir))
+    if (!bench_make_dirs(o.bake_dir))
         return fail("cannot create %s: %s", o.bake_dir, strerror(errno));
 
     static world_row worlds[MAX_LIST];
@@ -1624,17 +1539,17 @@ int main(int argc, char **argv)
                  .translate = setup.translate, .worlds = worlds, .n_worlds = nw, .bakes = bakes, .n_bakes = nb,
                  .refs = refs, .n_refs = nr, .centres = centres, .n_centres = nc, .targets = targets,
                  .n_targets = nt, .total_s = total_s};
-    if (status == 0 && !make_dirs(o.out_dir))
+    if (status == 0 && !bench_make_dirs(o.out_dir))
         status = fail("cannot create %s: %s", o.out_dir, strerror(errno));
     if (status == 0) {
         char path[4200];
         snprintf(path, sizeof path, "%s/bench_bake.csv", o.out_dir);
-        if (write_file(path, write_csv, &rp) == 0)
+        if (bench_write_file(path, write_csv, &rp) == 0)
             printf("bench_bake: wrote %s\n", path);
         else
             status = 1;
         snprintf(path, sizeof path, "%s/bench_bake.md", o.out_dir);
-        if (write_file(path, write_md, &rp) == 0)
+        if (bench_write_file(path, write_md, &rp) == 0)
             printf("bench_bake: wrote %s\n", path);
         else
             status = 1;

@@ -44,6 +44,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_common.h"
 #include "core/alloc.h"
 #include "io/image.h"
 #include "io/mesh.h"
@@ -272,102 +273,10 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- machine and files ------------------------------------------------- */
 
-/* The first "model name" of /proc/cpuinfo, or "unknown". */
-static void cpu_model(char *out, size_t cap)
-{
-    snprintf(out, cap, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) != 0)
-            continue;
-        const char *c = strchr(line, ':');
-        if (!c)
-            continue;
-        c++;
-        while (*c == ' ' || *c == '\t')
-            c++;
-        snprintf(out, cap, "%s", c);
-        out[strcspn(out, "\r\n")] = '\0';
-        break;
-    }
-    fclose(f);
-}
 
-/* mkdir -p. */
-static int make_dirs(const char *path)
-{
-    char buf[4096];
-    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
-        return 0;
-    for (char *p = buf + 1;; p++) {
-        if (*p == '/' || *p == '\0') {
-            char c = *p;
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return 0;
-            *p = c;
-            if (c == '\0')
-                break;
-        }
-    }
-    return 1;
-}
 
-/* Writes `text` producers to path through a temporary file and rename. */
-typedef void (*writer_fn)(FILE *f, const void *ctx);
-static int write_file(const char *path, writer_fn fn, const void *ctx)
-{
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid()) >= (int)sizeof tmp)
-        return fail("%s: path too long", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return fail("%s: cannot open: %s", tmp, strerror(errno));
-    fn(f, ctx);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) {
-        remove(tmp);
-        return fail("%s: write failed", tmp);
-    }
-    if (rename(tmp, path) != 0) {
-        remove(tmp);
-        return fail("%s: cannot rename to %s: %s", tmp, path, strerror(errno));
-    }
-    return 0;
-}
 
-/* A JSON string body: quotes, backslashes and control bytes escaped. */
-static int json_escape(const char *s, char *out, size_t cap)
-{
-    size_t k = 0;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        char tmp[8];
-        int n = c == '"' || c == '\\' ? snprintf(tmp, sizeof tmp, "\\%c", c)
-                : c < 0x20            ? snprintf(tmp, sizeof tmp, "\\u%04x", c)
-                                      : snprintf(tmp, sizeof tmp, "%c", c);
-        if (k + (size_t)n + 1 > cap)
-            return 0;
-        memcpy(out + k, tmp, (size_t)n);
-        k += (size_t)n;
-    }
-    out[k] = '\0';
-    return 1;
-}
 
-/* The files a cached reference depends on, by size and modification time
- * (sg_scene_file_hash covers paths only). */
-static uint64_t mix_file(uint64_t key, const char *path)
-{
-    struct stat st;
-    if (!path || stat(path, &st) != 0)
-        return sg_mix64(key ^ 0x5bd1e995u);
-    key = sg_mix64(key ^ (uint64_t)st.st_size);
-    return sg_mix64(key ^ (uint64_t)st.st_mtime);
-}
 
 /* ---- scene ------------------------------------------------------------- */
 
@@ -408,7 +317,7 @@ static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
 static int scene_json(const options *o, const scene_setup *s, size_t points, char *out, size_t cap)
 {
     char mesh[2048], env[2048], envpart[2200];
-    if (!json_escape(o->mesh, mesh, sizeof mesh) || !json_escape(o->envmap, env, sizeof env))
+    if (!bench_json_escape(o->mesh, mesh, sizeof mesh) || !bench_json_escape(o->envmap, env, sizeof env))
         return 0;
     if (s->have_envmap)
         snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
@@ -641,8 +550,8 @@ static sg_status get_reference(const sg_world *w, sg_scene_file *sf, const sg_ca
     sf->render.seed = REF_SEED;
     sf->render.max_depth = MAX_DEPTH;
     uint64_t key = sg_scene_file_hash(sf, SG_SCENE_HASH_ALL);
-    key = mix_file(key, sf->models[0].path);
-    key = mix_file(key, sf->env.path);
+    key = bench_mix_file(key, sf->models[0].path);
+    key = bench_mix_file(key, sf->env.path);
     key = sg_mix64(key ^ CACHE_VERSION);
     char base[3900], se_path[4000], note_path[4000];
     if (snprintf(base, sizeof base, "%s/ref_%016" PRIx64, o->cache_dir, key) >= (int)sizeof base)
@@ -689,7 +598,7 @@ static sg_status get_reference(const sg_world *w, sg_scene_file *sf, const sg_ca
     ref->cached = 0;
     /* The cache only saves time: failing to write it is a warning. */
     sg_error werr;
-    if (!make_dirs(o->cache_dir))
+    if (!bench_make_dirs(o->cache_dir))
         fprintf(stderr, "bench_ref: warning: cannot create %s: %s\n", o->cache_dir, strerror(errno));
     else if (sg_image_write_exr(&ref->mean, ref->path, &werr) != SG_OK ||
              sg_image_write_exr(&ref->std_error, se_path, &werr) != SG_OK)
@@ -985,7 +894,7 @@ int main(int argc, char **argv)
     omp_set_num_threads(o.threads); /* world builds too */
 
     char machine[256];
-    cpu_model(machine, sizeof machine);
+    bench_cpu_model(machine, sizeof machine);
     int nproc = (int)sysconf(_SC_NPROCESSORS_ONLN);
     int omp_max = omp_get_max_threads();
     printf("bench_ref: machine %s, nproc %d, omp_get_max_threads %d, threads %d%s\n", machine, nproc, omp_max,
@@ -1076,7 +985,7 @@ int main(int argc, char **argv)
             }
             printf("  reference %dx%d, %d spp: %.1f s%s, own noise relMSE %.3g (%s)\n", o.ref_size, o.ref_size,
                    o.ref_spp, ref.seconds, ref.cached ? " (cached)" : "", rp.ref_noise, ref.path);
-            if (make_dirs(o.out_dir)) {
+            if (bench_make_dirs(o.out_dir)) {
                 /* A preview, exposed so the image's mean luminance is 0.18. */
                 double lum = 0;
                 size_t np = (size_t)ref.mean.width * (size_t)ref.mean.height;
@@ -1127,24 +1036,24 @@ int main(int argc, char **argv)
     rp.speed_count = nspeed;
     rp.curve = curve;
     rp.curve_count = ncurve;
-    if (status == 0 && !make_dirs(o.out_dir))
+    if (status == 0 && !bench_make_dirs(o.out_dir))
         status = fail("cannot create %s: %s", o.out_dir, strerror(errno));
     if (status == 0) {
         char path[4200];
         snprintf(path, sizeof path, "%s/bench_ref.csv", o.out_dir);
-        if (write_file(path, write_speed_csv, &rp) == 0)
+        if (bench_write_file(path, write_speed_csv, &rp) == 0)
             printf("bench_ref: wrote %s\n", path);
         else
             status = 1;
         if (ncurve > 0) {
             snprintf(path, sizeof path, "%s/ref_error_time.csv", o.out_dir);
-            if (write_file(path, write_curve_csv, &rp) == 0)
+            if (bench_write_file(path, write_curve_csv, &rp) == 0)
                 printf("bench_ref: wrote %s\n", path);
             else
                 status = 1;
         }
         snprintf(path, sizeof path, "%s/bench_ref.md", o.out_dir);
-        if (write_file(path, write_md, &rp) == 0)
+        if (bench_write_file(path, write_md, &rp) == 0)
             printf("bench_ref: wrote %s\n", path);
         else
             status = 1;

@@ -27,6 +27,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "bench_common.h"
 #include "core/alloc.h"
 #include "embree_discs.h"
 #include "io/image.h"
@@ -247,29 +248,6 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- machine ---------------------------------------------------------- */
 
-/* The first "model name" of /proc/cpuinfo, or "unknown". */
-static void cpu_model(char *out, size_t cap)
-{
-    snprintf(out, cap, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) != 0)
-            continue;
-        const char *c = strchr(line, ':');
-        if (!c)
-            continue;
-        c++;
-        while (*c == ' ' || *c == '\t')
-            c++;
-        snprintf(out, cap, "%s", c);
-        out[strcspn(out, "\r\n")] = '\0';
-        break;
-    }
-    fclose(f);
-}
 
 /* ---- cameras ---------------------------------------------------------- */
 
@@ -394,28 +372,6 @@ static void print_head_text(FILE *f)
             "leaves", "isects", "splats", "hit", "E.build", "E.Mr/s", "ratio", "agree");
 }
 
-/* Writes `text` producers to path through a temporary file and rename. */
-typedef void (*writer_fn)(FILE *f, const void *ctx);
-static int write_file(const char *path, writer_fn fn, const void *ctx)
-{
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid()) >= (int)sizeof tmp)
-        return fail("%s: path too long", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return fail("%s: cannot open: %s", tmp, strerror(errno));
-    fn(f, ctx);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) {
-        remove(tmp);
-        return fail("%s: write failed", tmp);
-    }
-    if (rename(tmp, path) != 0) {
-        remove(tmp);
-        return fail("%s: cannot rename to %s: %s", tmp, path, strerror(errno));
-    }
-    return 0;
-}
 
 typedef struct report {
     const row *rows;
@@ -500,7 +456,7 @@ int main(int argc, char **argv)
     }
 
     char machine[256];
-    cpu_model(machine, sizeof machine);
+    bench_cpu_model(machine, sizeof machine);
     int nproc = (int)sysconf(_SC_NPROCESSORS_ONLN);
     int omp_max = omp_get_max_threads();
     printf("bench_trace: machine %s, nproc %d, omp_get_max_threads %d, threads %d, Embree %s\n",
@@ -618,13 +574,13 @@ int main(int argc, char **argv)
 
     report rp = {rows, nrows, machine, o.threads, nproc, omp_max, o.frames, o.mesh};
     if (o.csv) {
-        if (write_file(o.csv, write_csv, &rp) == 0)
+        if (bench_write_file(o.csv, write_csv, &rp) == 0)
             printf("bench_trace: wrote %s\n", o.csv);
         else
             status = 1;
     }
     if (o.md) {
-        if (write_file(o.md, write_md, &rp) == 0)
+        if (bench_write_file(o.md, write_md, &rp) == 0)
             printf("bench_trace: wrote %s\n", o.md);
         else
             status = 1;

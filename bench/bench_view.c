@@ -42,6 +42,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bench_common.h"
 #include "bake/bake.h"
 #include "display/ocio.h"
 #include "io/mesh.h"
@@ -220,28 +221,6 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- machine and files ------------------------------------------------ */
 
-static void cpu_model(char *out, size_t cap)
-{
-    snprintf(out, cap, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) != 0)
-            continue;
-        const char *c = strchr(line, ':');
-        if (!c)
-            continue;
-        c++;
-        while (*c == ' ' || *c == '\t')
-            c++;
-        snprintf(out, cap, "%s", c);
-        out[strcspn(out, "\r\n")] = '\0';
-        break;
-    }
-    fclose(f);
-}
 
 static void load_avg(double l[3])
 {
@@ -254,69 +233,13 @@ static void load_avg(double l[3])
     fclose(f);
 }
 
-static int make_dirs(const char *path)
-{
-    char buf[4096];
-    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
-        return 0;
-    for (char *p = buf + 1;; p++) {
-        if (*p == '/' || *p == '\0') {
-            char c = *p;
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return 0;
-            *p = c;
-            if (c == '\0')
-                break;
-        }
-    }
-    return 1;
-}
 
-typedef void (*writer_fn)(FILE *f, const void *ctx);
-static int write_file(const char *path, writer_fn fn, const void *ctx)
-{
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid()) >= (int)sizeof tmp)
-        return fail("%s: path too long", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return fail("%s: cannot open: %s", tmp, strerror(errno));
-    fn(f, ctx);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) {
-        remove(tmp);
-        return fail("%s: write failed", tmp);
-    }
-    if (rename(tmp, path) != 0) {
-        remove(tmp);
-        return fail("%s: cannot rename to %s: %s", tmp, path, strerror(errno));
-    }
-    return 0;
-}
 
 static void write_text(FILE *f, const void *ctx)
 {
     fputs((const char *)ctx, f);
 }
 
-static int json_escape(const char *s, char *out, size_t cap)
-{
-    size_t k = 0;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        char tmp[8];
-        int n = c == '"' || c == '\\' ? snprintf(tmp, sizeof tmp, "\\%c", c)
-                : c < 0x20            ? snprintf(tmp, sizeof tmp, "\\u%04x", c)
-                                      : snprintf(tmp, sizeof tmp, "%c", c);
-        if (k + (size_t)n + 1 > cap)
-            return 0;
-        memcpy(out + k, tmp, (size_t)n);
-        k += (size_t)n;
-    }
-    out[k] = '\0';
-    return 1;
-}
 
 /* ---- scene and path ---------------------------------------------------- */
 
@@ -353,7 +276,7 @@ static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
 static int scene_json(const options *o, const scene_setup *s, size_t points, int mat, char *out, size_t cap)
 {
     char mesh[2048], env[2048], envpart[2200], material[256];
-    if (!json_escape(o->mesh, mesh, sizeof mesh) || !json_escape(o->envmap, env, sizeof env))
+    if (!bench_json_escape(o->mesh, mesh, sizeof mesh) || !bench_json_escape(o->envmap, env, sizeof env))
         return 0;
     if (s->have_envmap)
         snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
@@ -590,7 +513,7 @@ int main(int argc, char **argv)
     omp_set_num_threads(o.threads);
 
     char machine[256];
-    cpu_model(machine, sizeof machine);
+    bench_cpu_model(machine, sizeof machine);
     report rp = {.o = &o, .machine = machine, .nproc = (int)sysconf(_SC_NPROCESSORS_ONLN)};
     load_avg(rp.load0);
     printf("bench_view: machine %s, nproc %d, omp_get_max_threads %d, threads %d, load %.2f%s\n", machine,
@@ -606,7 +529,7 @@ int main(int argc, char **argv)
     if (make_path(&setup, &path, &err) != SG_OK)
         return fail("path: %s", err.message);
     rp.keys = path.count;
-    if (!make_dirs(PATH_DIR))
+    if (!bench_make_dirs(PATH_DIR))
         return fail("cannot create %s: %s", PATH_DIR, strerror(errno));
     if (sg_campath_write(&path, PATH_DIR "/path.txt", &err) != SG_OK)
         return fail("%s", err.message);
@@ -637,7 +560,7 @@ int main(int argc, char **argv)
                 status = fail("scene JSON too long");
                 break;
             }
-            write_file(jpath, write_text, json);
+            bench_write_file(jpath, write_text, json);
             if (sg_scene_file_parse(json, strlen(json), jpath, NULL, &sf, &err) != SG_OK) {
                 status = fail("%s", err.message);
                 break;
@@ -703,15 +626,15 @@ int main(int argc, char **argv)
     if (bb)
         printf("target 1M diffuse 1024x768 >= 15 fps: %.1f fps (%s)\n", bb->fps, bb->fps >= 15 ? "met" : "NOT met");
 
-    if (nrows > 0 && make_dirs(o.out_dir)) {
+    if (nrows > 0 && bench_make_dirs(o.out_dir)) {
         char p[4200];
         snprintf(p, sizeof p, "%s/bench_view.csv", o.out_dir);
-        if (write_file(p, write_csv, &rp) == 0)
+        if (bench_write_file(p, write_csv, &rp) == 0)
             printf("bench_view: wrote %s\n", p);
         else
             status = 1;
         snprintf(p, sizeof p, "%s/bench_view.md", o.out_dir);
-        if (write_file(p, write_md, &rp) == 0)
+        if (bench_write_file(p, write_md, &rp) == 0)
             printf("bench_view: wrote %s\n", p);
         else
             status = 1;

@@ -1,0 +1,30 @@
+/* bench_common.h — scaffolding the benchmark programs share: the machine
+ * line, output folders, files written whole (temporary name, then
+ * rename), JSON strings, and a cache key over a file's contents. */
+#ifndef SG_BENCH_COMMON_H
+#define SG_BENCH_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+/* The CPU model from /proc/cpuinfo ("unknown" if absent). */
+void bench_cpu_model(char *out, size_t cap);
+
+/* mkdir -p; 1 on success. */
+int bench_make_dirs(const char *path);
+
+/* Writes a file through fn(f, ctx) to a temporary name and renames it
+ * into place; 0 on success, 1 (after a message on stderr) on failure, with
+ * nothing left behind. */
+typedef void (*writer_fn)(FILE *f, const void *ctx);
+int bench_write_file(const char *path, writer_fn fn, const void *ctx);
+
+/* s as the inside of a JSON string; 1 if it fit in cap. */
+int bench_json_escape(const char *s, char *out, size_t cap);
+
+/* Mixes the size and modification time of the file at path into key (a
+ * cache key). */
+uint64_t bench_mix_file(uint64_t key, const char *path);
+
+#endif
