@@ -32,4 +32,17 @@ bool sg_realloc_array(void **ptr, size_t old_count, size_t new_count, size_t siz
 
 void sg_free(void *ptr);
 
+/* Test hooks (double underscore: not for programs). Fault injection, as
+ * SQLite's tests do it: after sg_alloc__fail_after(n) the next n
+ * allocations succeed and every later one fails (returns NULL) until
+ * sg_alloc__fail_after(-1) switches failures off again; it returns the
+ * countdown it replaces, so fail_after(N) ... fail_after(-1) tells how many
+ * allocations happened in between (N minus the answer). sg_alloc__live()
+ * is the number of blocks allocated and not yet freed, so a test can check
+ * that an error path frees all it took. Both are process-wide and atomic;
+ * a test that uses them must not run library calls on other threads of
+ * its own at the same time. */
+long sg_alloc__fail_after(long n);
+long sg_alloc__live(void);
+
 #endif
