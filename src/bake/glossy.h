@@ -20,7 +20,7 @@
  *     S(wo_b) ~ 1/M sum_j L(wi_j) f_ggx(wo_b, wi_j) cos_j / p_mix(wi_j),
  * c_x = n_x / M: unbiased for every bin at once. L(wi) is the envmap where
  * the ray from the sample escapes, else the DIFFUSE baked radiance of the
- * surface it hits (emission + rho/pi E, a final gather: E must be complete
+ * surface it hits (emission + (1 - k) rho/pi E, a final gather: E must be complete
  * for every model first). Random numbers: sg_rng_float(seed, global splat
  * index of the sample, 1, dim): independent of the thread count.
  *
