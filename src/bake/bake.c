@@ -41,8 +41,9 @@ enum { LOOKUP_SPLATS = 32, TILE = 16 };
 
 /* Refinement of the direct light's sample points (samples.h): levels at
  * s/2 and s/4, where neighbouring samples differ by more than half the
- * larger value (a shadow edge differs by a factor 2 or more; two 32-ray
- * estimates of the same light rarely do). Interpolation support: twice a
+ * larger value (a shadow edge differs by a factor 2 or more) and by more
+ * than three standard errors of the difference (noise alone, which at
+ * 4 + 4 rays often exceeds 50%, then refines almost nowhere). Interpolation support: twice a
  * sample's spacing (a splat then sees about 4 pi samples, which averages
  * their noise without reaching past the next ring). */
 enum { REFINE_LEVELS = 2 };
@@ -227,7 +228,7 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, m));
     int direct = d->direct_samples > 0;
     uint64_t seed = d->photons.seed ^ 0xD1EC7ull;
-    float *vals = NULL, *D = NULL;
+    float *vals = NULL, *sig = NULL, *D = NULL;
     sg_status st = SG_OK;
     if (!(s0 > 0.0f)) { /* every splat a sample point: no interpolation */
         if (!(set->splat = sg_alloc_array(ps->count, sizeof *set->splat)) ||
@@ -240,7 +241,8 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
             return SG_OK;
         if (!(D = sg_alloc_array(3 * ps->count, sizeof *D)))
             return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the direct light");
-        st = sg_direct_irradiance_at(w, m, NULL, 0, key_base, d->direct_samples, seed, d->gather.threads, D, err);
+        st = sg_direct_irradiance_at(w, m, NULL, 0, key_base, d->direct_samples, seed, d->gather.threads, D, NULL,
+                                     err);
         if (st == SG_OK)
             for (size_t i = 0; i < 3 * ps->count; ++i)
                 E[i] += D[i];
@@ -252,19 +254,22 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
         return st;
     size_t done = 0;
     for (int level = 0;; ++level) {
-        void *grown = vals;
-        if (!sg_realloc_array(&grown, 3 * done, 3 * set->count, sizeof *vals)) {
+        void *grown = vals, *grown_sig = sig;
+        int ok = sg_realloc_array(&grown, 3 * done, 3 * set->count, sizeof *vals);
+        vals = grown;
+        ok = ok && sg_realloc_array(&grown_sig, done, set->count, sizeof *sig);
+        sig = grown_sig;
+        if (!ok) {
             st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the direct light");
             goto done;
         }
-        vals = grown;
         if ((st = sg_direct_irradiance_at(w, m, set->splat + done, set->count - done, key_base, d->direct_samples,
-                                          seed, d->gather.threads, vals + 3 * done, err)) != SG_OK)
+                                          seed, d->gather.threads, vals + 3 * done, sig + done, err)) != SG_OK)
             goto done;
         done = set->count;
         size_t added = 0;
         if (level >= REFINE_LEVELS ||
-            (st = sg_samples_refine(ps, s0, cosn, vals, REFINE_THRESHOLD, (uint8_t)level, set, &added, err)) !=
+            (st = sg_samples_refine(ps, s0, cosn, vals, sig, REFINE_THRESHOLD, (uint8_t)level, set, &added, err)) !=
                 SG_OK ||
             added == 0)
             break;
@@ -281,6 +286,7 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
             E[i] += D[i];
 done:
     sg_free(vals);
+    sg_free(sig);
     sg_free(D);
     return st;
 }

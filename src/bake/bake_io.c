@@ -6,8 +6,8 @@
  *     parameters, the irradiance or records and the ray counts: nothing
  *     timed and nothing that depends on the thread count goes in, so equal
  *     bakes are equal files (what makes resume checkable with cmp);
- *  2. META elements 1..7 hash (sg_bake_param_hash) to the header's
- *     parameter hash; load refuses a file where they do not;
+ *  2. META elements 1..7 and 19..22 hash (sg_bake_param_hash) to the
+ *     header's parameter hash; load refuses a file where they do not;
  *  3. bytes from a file reach no assert: each value is range-checked and a
  *     failure is SG_ERR_CORRUPT naming the file, section, model or record;
  *  4. load builds nothing the caller sees until every check passed: *out is
@@ -235,7 +235,7 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
     return st;
 }
 
-/* Section tag of model m's sample counts etc.: a u64 array of the models. */
+/* A U64 section of n values (SCNT, GRES): one per model. */
 static sg_status read_u64s(const sg_bake_file *f, const char *path, const char *tag, size_t n, uint64_t *out,
                            sg_error *err)
 {

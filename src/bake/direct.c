@@ -27,7 +27,7 @@ static sg_vec3 to_world(sg_vec3 n, sg_vec3 v)
 
 sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t *splats, size_t n,
                                   uint64_t key_base, int samples, uint64_t seed, int threads, float *out,
-                                  sg_error *err)
+                                  float *sigma, sg_error *err)
 {
     if (samples < 1)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "direct light: %d samples per splat", samples);
@@ -45,8 +45,9 @@ sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t 
                                   .leaf = UINT32_MAX},
                           .model = m};
         uint64_t key = key_base + i;
-        double e[3] = {0, 0, 0};
+        double e[3] = {0, 0, 0}, y2 = 0.0; /* y2: sum of squared per-sample luminances */
         for (int s = 0; s < samples; ++s) {
+            double before = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
             uint32_t d0 = (uint32_t)(4 * s);
             /* Envmap sampling. */
             float pl;
@@ -74,6 +75,14 @@ sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t 
                     e[0] += L.x * k; e[1] += L.y * k; e[2] += L.z * k;
                 }
             }
+            double y = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2] - before;
+            y2 += y * y;
+        }
+        if (sigma) {
+            double mean = (0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2]) / samples;
+            double var = samples > 1 ? (y2 / samples - mean * mean) * samples / (samples - 1) : mean * mean;
+            double se = sqrt(var > 0.0 ? var / samples : 0.0);
+            sigma[j] = isfinite(se) ? (float)se : 0.0f;
         }
         for (int c = 0; c < 3; ++c) {
             double v = e[c] / samples;

@@ -27,9 +27,13 @@
  * for splat splats[j] (splats NULL: every splat, j = splat index; n is
  * then ignored). The random stream of splat i is keyed by key_base + i,
  * key_base = the number of splats of models before m, so a splat's value
- * does not depend on which other splats are computed. samples >= 1. */
+ * does not depend on which other splats are computed. samples >= 1.
+ * sigma (NULL: not wanted): per listed splat, the standard error of the
+ * estimate's luminance (0.2126 R + 0.7152 G + 0.0722 B), from the spread
+ * of the per-sample terms: what the refinement of the sample points
+ * (samples.h) tells apart from a real change of the light. */
 sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t *splats, size_t n,
                                   uint64_t key_base, int samples, uint64_t seed, int threads, float *out,
-                                  sg_error *err);
+                                  float *sigma, sg_error *err);
 
 #endif

@@ -213,8 +213,9 @@ sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos
 
 static float level_spacing(float s0, uint8_t level) { return ldexpf(s0, -(int)level); }
 
-sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values, float threshold,
-                            uint8_t level, sg_sample_set *set, size_t *added, sg_error *err)
+sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                            const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
+                            sg_error *err)
 {
     *added = 0;
     if (level >= SG_SAMPLES_MAX_LEVEL || set->count == 0)
@@ -250,8 +251,9 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
                 if (i == j || dist2(p, sg_pointset_position(ps, si)) > r2 ||
                     sg_v3_dot(n, sg_pointset_normal(ps, si)) < normal_cos)
                     continue;
-                float yi = fmaxf(luminance(values + 3 * (size_t)i), floor_y);
-                differs = fabsf(yi - yj) > threshold * fmaxf(yi, yj);
+                float yi = fmaxf(luminance(values + 3 * (size_t)i), floor_y), dy = fabsf(yi - yj);
+                differs = dy > threshold * fmaxf(yi, yj) &&
+                          (!sigma || dy > 3.0f * sqrtf(sigma[i] * sigma[i] + sigma[j] * sigma[j]));
             }
         if (differs)
             marked[nmarked++] = (uint32_t)j;
@@ -363,28 +365,65 @@ sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set
     int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
     for (size_t i = 0; i < ps->count; ++i) {
-        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i), t, bt;
+        sg_v3_basis(n, &t, &bt);
         uint32_t heads[27];
         grid_around(&g, p, heads);
-        double acc[3] = {0, 0, 0}, wsum = 0.0;
+        /* Weighted least squares of f = c0 + c1 u + c2 v in the splat's
+         * tangent plane (u, v in units of the level-0 support), c0 the
+         * value: exact for light that varies linearly over the surface,
+         * and on a curved surface the normal (what the light depends on)
+         * does, to first order. A weighted mean would pull every value
+         * towards its neighbourhood's average (1.5% of the energy on a
+         * unit sphere at the default spacing, measured). */
+        double m[6] = {0, 0, 0, 0, 0, 0}; /* sums of w, wu, wv, wuu, wuv, wvv */
+        double rhs[3][3] = {{0}};         /* per channel: sums of wf, wfu, wfv */
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        float inv_r0 = 1.0f / (support * s0);
         for (int k = 0; k < 27; ++k)
             for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
                 uint32_t sj = set->splat[j];
                 float r = support * level_spacing(s0, set->level[j]);
-                float d2 = dist2(p, sg_pointset_position(ps, sj));
+                sg_vec3 dp = sg_v3_sub(sg_pointset_position(ps, sj), p);
+                float d2 = sg_v3_dot(dp, dp);
                 if (d2 >= r * r || sg_v3_dot(n, sg_pointset_normal(ps, sj)) < normal_cos)
                     continue;
                 /* Finer samples count 4^level more: they were added where
                  * the light changes faster than the coarse ones resolve. */
                 double w = (double)wendland(sqrtf(d2) / r) * (double)(1u << (2 * set->level[j]));
-                acc[0] += w * values[3 * (size_t)j];
-                acc[1] += w * values[3 * (size_t)j + 1];
-                acc[2] += w * values[3 * (size_t)j + 2];
-                wsum += w;
+                double u = sg_v3_dot(dp, t) * inv_r0, v = sg_v3_dot(dp, bt) * inv_r0;
+                m[0] += w;
+                m[1] += w * u;
+                m[2] += w * v;
+                m[3] += w * u * u;
+                m[4] += w * u * v;
+                m[5] += w * v * v;
+                for (int c = 0; c < 3; ++c) {
+                    float f = values[3 * (size_t)j + (size_t)c];
+                    rhs[c][0] += w * f;
+                    rhs[c][1] += w * f * u;
+                    rhs[c][2] += w * f * v;
+                    lo[c] = fminf(lo[c], f);
+                    hi[c] = fmaxf(hi[c], f);
+                }
             }
-        if (wsum > 0.0) {
-            for (int c = 0; c < 3; ++c)
-                out[3 * i + c] = (float)(acc[c] / wsum);
+        if (m[0] > 0.0) {
+            /* c0 by Cramer's rule; the weighted mean where the points do
+             * not span the plane (a line of samples, one sample, a rim). */
+            double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
+            double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
+            int fit = det > 1e-4 * a * a * a;
+            for (int c = 0; c < 3; ++c) {
+                double v0 = rhs[c][0] / a;
+                if (fit) {
+                    double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
+                    v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
+                }
+                /* no new extrema: a fit across a shadow edge cannot
+                 * overshoot the values it was made from */
+                float vf = (float)v0;
+                out[3 * i + (size_t)c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
+            }
         } else {
             uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
             if (j == NONE)

@@ -12,7 +12,8 @@
  *    than s; every candidate has a same-facing sample within s.
  *  - refinement (sg_samples_refine): where a sample's value (luminance)
  *    differs from a same-facing neighbour sample's by more than a relative
- *    threshold (a shadow boundary, a contact shadow), the splats within the
+ *    threshold and beyond its noise (a shadow boundary, a contact shadow),
+ *    the splats within the
  *    sample's spacing become candidates of a thinning at half the spacing
  *    (one level finer). Decisions run in sample order after all values are
  *    known, so the set ignores the thread count.
@@ -69,18 +70,23 @@ float sg_samples_default_spacing(const sg_material *m);
 sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos, const uint32_t *candidates,
                           size_t ncand, uint8_t level, sg_sample_set *set, sg_error *err);
 
-/* One refinement step. values: 3 floats (RGB) per sample of set. A sample
- * of level `level` is marked when some same-facing sample within twice
- * its spacing differs in luminance by more than threshold * max of the
- * two (values below 5% of the mean luminance count as that floor). The
- * splats within one spacing of a marked sample are thinned at half its
- * spacing (level + 1) into set; *added gets the number of new samples
- * (indices [old count, set->count)). s0: spacing of level 0. */
-sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values, float threshold,
-                            uint8_t level, sg_sample_set *set, size_t *added, sg_error *err);
+/* One refinement step. values: 3 floats (RGB) per sample of set; sigma
+ * (NULL: none) the standard error of each value's luminance. A sample of
+ * level `level` is marked when some same-facing sample within twice its
+ * spacing differs in luminance by more than threshold * max of the two
+ * (values below 5% of the mean luminance count as that floor) AND by more
+ * than 3 sqrt(sigma_a^2 + sigma_b^2), so that Monte Carlo noise alone
+ * rarely refines. The splats within one spacing of a marked sample are
+ * thinned at half its spacing (level + 1) into set; *added gets the
+ * number of new samples (indices [old count, set->count)). s0: spacing of
+ * level 0. */
+sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                            const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
+                            sg_error *err);
 
 /* out: 3 floats per splat, interpolated from values (3 floats per sample)
- * as described above; support: kernel radius as a multiple of a sample's
+ * as described above (a constant is reproduced exactly, a linear
+ * function of the tangent-plane position too where the samples span it); support: kernel radius as a multiple of a sample's
  * spacing (e.g. 2). Deterministic. */
 sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err);

@@ -3,7 +3,8 @@
  *     spacing, every splat within the spacing of a same-facing sample, far
  *     fewer samples than splats;
  *  2. refinement: a step in the values adds samples along the step only,
- *     at half the spacing and respecting it; constant values add none;
+ *     at half the spacing and respecting it; constant values, or a step
+ *     within the values' noise, add none;
  *  3. interpolation reproduces a constant exactly (weights normalised) and
  *     a step stays a step away from it (no blur beyond the support);
  *  4. nearest: each splat's sample is its nearest same-facing one.
@@ -104,12 +105,22 @@ static void test_samples_refine_follows_a_step(void **state)
     for (size_t j = 0; j < 3 * n0; ++j)
         v[j] = 2.0f;
     size_t added = 1;
-    assert_int_equal(sg_samples_refine(ps, s, COS, v, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, &set, &added, NULL), SG_OK);
     assert_int_equal(added, 0);
     for (size_t j = 0; j < n0; ++j)
         for (int c = 0; c < 3; ++c)
             v[3 * j + c] = ps->px[set.splat[j]] > 0.0f ? 2.0f : 0.2f;
-    assert_int_equal(sg_samples_refine(ps, s, COS, v, 0.5f, 0, &set, &added, NULL), SG_OK);
+    /* The same step within its noise (standard error 1 on a difference
+     * of 1.8): not significant, not refined. */
+    float *sig = sg_alloc_array(n0, sizeof *sig);
+    assert_non_null(sig);
+    for (size_t j = 0; j < n0; ++j)
+        sig[j] = 1.0f;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(added, 0);
+    for (size_t j = 0; j < n0; ++j)
+        sig[j] = 0.1f;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
     fprintf(stderr, "refinement: %zu samples, %zu added along the step\n", n0, added);
     assert_true(added > 0);
     assert_int_equal(set.count, n0 + added);
@@ -125,6 +136,7 @@ static void test_samples_refine_follows_a_step(void **state)
                          sqrt(d2(ps, set.splat[j], set.splat[k])), k, 0.5 * s);
     }
     sg_free(v);
+    sg_free(sig);
     sg_sample_set_free(&set);
     sg_world_destroy(w);
 }
