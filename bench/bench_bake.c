@@ -18,7 +18,7 @@
  * under --bake-dir, removed afterwards), and one lookup frame
  * (sg_bake_render) at --frame-size (512) for its time. Which bakes: every
  * size at --size-photons with --size-ks (photons carrying the direct light)
- * and --size-direct (shadow rays, the library's default 16); the curve
+ * and --size-direct (shadow rays, the library's default 32); the curve
  * sizes also over a photon sweep (--photons; the largest curve size
  * --target-photons) with --ks, and with --direct shadow-ray samples at
  * --direct-photons.
@@ -120,14 +120,14 @@ static const char usage[] =
     "  --ks A,B,...         gather k values of the photon sweeps (default 64,128); the\n"
     "                       photons carry the direct light (direct_samples -1)\n"
     "  --direct A,B,...     curve sizes: direct light by shadow rays, these samples per\n"
-    "                       splat and strategy, at --direct-photons, first k (default 4,16)\n"
+    "                       splat and strategy, at --direct-photons, first k (default 4,16,32)\n"
     "  --direct-photons N   photons of those bakes (default 1000000)\n"
     "  --spacings A,B,...   every shadow-ray bake once per sample spacing (sg_bake_desc.\n"
     "                       sample_spacing: 0 = the material's default, 'all' = every\n"
     "                       splat a sample point; default 0,all)\n"
     "  --size-photons N     photons of the model-size rows, every size (default 1000000)\n"
     "  --size-ks A,B,...    their k values, photons carrying direct light (default 64,128,256)\n"
-    "  --size-direct A,...  and shadow-ray bakes at the first size k (default 16: the\n"
+    "  --size-direct A,...  and shadow-ray bakes at the first size k (default 32: the\n"
     "                       library's default bake)\n"
     "  --size N             error image side (default 128)\n"
     "  --frame-size N       timed frame side, of the bake and sg_ref_render (default 512)\n"
@@ -362,8 +362,8 @@ static int parse_options(int argc, char **argv, options *o)
                &o->n_target_photons);
     parse_list(q ? "64" : "64,128", 1, 1ull << 34, o->ks, &o->n_ks);
     parse_list(q ? "64" : "64,128,256", 1, 1ull << 34, o->size_ks, &o->n_size_ks);
-    parse_ints(q ? "4" : "4,16", o->direct, &o->n_direct);
-    parse_ints(q ? "4" : "16", o->size_direct, &o->n_size_direct);
+    parse_ints(q ? "4" : "4,16,32", o->direct, &o->n_direct);
+    parse_ints(q ? "4" : "32", o->size_direct, &o->n_size_direct);
     parse_spacings("0,all", o->spacings, &o->n_spacings);
     o->direct_photons = q ? 100000 : 1000000;
     o->size_photons = q ? 200000 : 1000000;
@@ -1263,7 +1263,7 @@ static void write_md(FILE *f, const void *ctx)
                "then `sg_bake_create_from_photons` once per (k, direct) on the same map (bake s = trace s + "
                "gather s, what `sg_bake_create` takes). direct: `photons` = `direct_samples` -1, the photons "
                "carry the direct light too and the gather is the kNN estimate alone; `S = n` = the direct light "
-               "by n + n shadow rays per sample point (envmap and cosine sampling, bake/direct.h; 16 is the "
+               "by n + n shadow rays per sample point (envmap and cosine sampling, bake/direct.h; 32 is the "
                "library's default) at `sample points` (bake/samples.h: the material's default spacing, 4 median "
                "splat radii for these Lambert models, refined twice where the light changes fast, then "
                "interpolated to every splat: the library's default) or at `every splat` (sample_spacing < 0, "

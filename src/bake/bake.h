@@ -48,7 +48,7 @@ typedef struct sg_bake_desc {
     sg_irradiance_desc gather;   /* k, normal_cos (irradiance.h defaults)    */
     int direct_samples;          /* direct light by shadow rays at the sample
                                     points (bake/direct.h), samples per point
-                                    per strategy; default 16; < 0: none, the
+                                    per strategy; default 32; < 0: none, the
                                     photons carry the direct light as well   */
     float sample_spacing;        /* spacing of the sample points, a multiple
                                     of each model's median splat radius;
