@@ -199,8 +199,9 @@ static void test_bake_glossy_matches_reference(void **state)
     double ratio, rel_mse, ratio_d, rel_mse_d;
     compare_with_reference(b, w, &cam, 32, 1, &ratio, &rel_mse);
     compare_with_reference(b, w, &cam, 32, 0, &ratio_d, &rel_mse_d);
-    fprintf(stderr, "glossy bake vs reference: ratio %.4f, relMSE %.5f; diffuse-only lookup: ratio %.4f, relMSE %.5f\n",
-            ratio, rel_mse, ratio_d, rel_mse_d);
+    fprintf(stderr, "glossy bake vs reference (%zu glossy points, R = %d): ratio %.4f, relMSE %.5f; diffuse-only "
+                    "lookup: ratio %.4f, relMSE %.5f\n",
+            st.glossy_points, sg_glossy_default_res(sg_world_material(w, 0)), ratio, rel_mse, ratio_d, rel_mse_d);
     if (!(fabs(ratio - 1.0) <= 0.02) || !(rel_mse <= 0.02))
         fail_msg("glossy: mean-energy ratio %.4f (bound 1 +- 0.02), relative MSE %.5f (bound 0.02)", ratio, rel_mse);
     /* The test detects lost highlights: the old lookup must fail it. */
