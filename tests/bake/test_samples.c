@@ -5,8 +5,9 @@
  *  2. refinement: a step in the values adds samples along the step only,
  *     at half the spacing and respecting it; constant values, or a step
  *     within the values' noise, add none;
- *  3. interpolation reproduces a constant exactly (weights normalised) and
- *     a step stays a step away from it (no blur beyond the support);
+ *  3. interpolation reproduces a constant exactly (weights normalised), a
+ *     linear function of position too (the tangent-plane fit), and a step
+ *     stays a step away from it (no blur beyond the support);
  *  4. nearest: each splat's sample is its nearest same-facing one.
  * The models are the builtin sphere and ground (render/world.h). */
 #include "test_support.h"
@@ -167,6 +168,25 @@ static void test_samples_interpolate(void **state)
             fabsf(out[3 * i + 2] - 3.0f) > 1e-5f)
             fail_msg("splat %zu: (%g, %g, %g), expected (1.5, 0.25, 3)", i, out[3 * i], out[3 * i + 1],
                      out[3 * i + 2]);
+    /* A linear function of position, away from the rim (where the fit
+     * would extrapolate and is clamped): reproduced to float rounding. */
+    for (size_t j = 0; j < set.count; ++j) {
+        float x = ps->px[set.splat[j]], z = ps->pz[set.splat[j]];
+        v[3 * j] = 2.0f + 0.05f * x;
+        v[3 * j + 1] = 2.0f - 0.03f * z;
+        v[3 * j + 2] = 2.0f + 0.02f * (x + z);
+    }
+    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    for (size_t i = 0; i < ps->count; ++i) {
+        float x = ps->px[i], z = ps->pz[i];
+        if (fabsf(x) > 15.0f - 3.0f * s || fabsf(z) > 15.0f - 3.0f * s)
+            continue;
+        float want[3] = {2.0f + 0.05f * x, 2.0f - 0.03f * z, 2.0f + 0.02f * (x + z)};
+        for (int c = 0; c < 3; ++c)
+            if (!(fabsf(out[3 * i + (size_t)c] - want[c]) <= 1e-4f))
+                fail_msg("splat %zu at (%g, %g), channel %d: %.6f, the linear field is %.6f", i, x, z, c,
+                         out[3 * i + (size_t)c], want[c]);
+    }
     for (size_t j = 0; j < set.count; ++j)
         v[3 * j] = v[3 * j + 1] = v[3 * j + 2] = ps->px[set.splat[j]] > 0.0f ? 1.0f : 0.0f;
     assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 1, out, NULL), SG_OK);
