@@ -18,7 +18,7 @@
  * under --bake-dir, removed afterwards), and one lookup frame
  * (sg_bake_render) at --frame-size (512) for its time. Which bakes: every
  * size at --size-photons with --size-ks (photons carrying the direct light)
- * and --size-direct (shadow rays, the library's default 16); the curve
+ * and --size-direct (shadow rays, the library's default 32); the curve
  * sizes also over a photon sweep (--photons; the largest curve size
  * --target-photons) with --ks, and with --direct shadow-ray samples at
  * --direct-photons.
@@ -120,11 +120,14 @@ static const char usage[] =
     "  --ks A,B,...         gather k values of the photon sweeps (default 64,128); the\n"
     "                       photons carry the direct light (direct_samples -1)\n"
     "  --direct A,B,...     curve sizes: direct light by shadow rays, these samples per\n"
-    "                       splat and strategy, at --direct-photons, first k (default 4,16)\n"
+    "                       splat and strategy, at --direct-photons, first k (default 4,16,32)\n"
     "  --direct-photons N   photons of those bakes (default 1000000)\n"
+    "  --spacings A,B,...   every shadow-ray bake once per sample spacing (sg_bake_desc.\n"
+    "                       sample_spacing: 0 = the material's default, 'all' = every\n"
+    "                       splat a sample point; default 0,all)\n"
     "  --size-photons N     photons of the model-size rows, every size (default 1000000)\n"
     "  --size-ks A,B,...    their k values, photons carrying direct light (default 64,128,256)\n"
-    "  --size-direct A,...  and shadow-ray bakes at the first size k (default 16: the\n"
+    "  --size-direct A,...  and shadow-ray bakes at the first size k (default 32: the\n"
     "                       library's default bake)\n"
     "  --size N             error image side (default 128)\n"
     "  --frame-size N       timed frame side, of the bake and sg_ref_render (default 512)\n"
@@ -145,6 +148,8 @@ typedef struct options {
     size_t sizes[MAX_LIST], curve_sizes[MAX_LIST], photons[MAX_LIST], target_photons[MAX_LIST];
     size_t ks[MAX_LIST], size_ks[MAX_LIST];
     int direct[MAX_LIST], size_direct[MAX_LIST]; /* shadow-ray samples; -1: photons carry direct light */
+    float spacings[MAX_LIST];   /* sample_spacing of the shadow-ray bakes (0: material default, -1: every splat) */
+    int n_spacings;
     int n_sizes, n_curve, n_photons, n_target_photons, n_ks, n_size_ks, n_direct, n_size_direct;
     size_t size_photons, direct_photons;
     int size, frame_size, ref_spp, max_spp, runs, threads, quick, keep_bakes;
@@ -160,6 +165,9 @@ typedef struct world_row {
 typedef struct bake_row {
     size_t points, splats, photons, k, records;
     int direct;                 /* sg_bake_desc.direct_samples (-1: none)   */
+    float spacing;              /* sg_bake_desc.sample_spacing              */
+    size_t samples;             /* sample points, all models                */
+    size_t bake_bytes;          /* sg_bake_stats.memory_bytes               */
     int curve;                  /* 1: error measured                        */
     double trace_s, gather_s, bake_s, save_s;
     size_t irr_bytes, photon_bytes, file_bytes;
@@ -275,6 +283,44 @@ static int parse_ints(const char *s, int *vals, int *n)
     return *n > 0;
 }
 
+/* "0,all,2.5": sample spacings; "all" is -1 (every splat). */
+static int parse_spacings(const char *s, float *vals, int *n)
+{
+    *n = 0;
+    while (*s) {
+        char *end;
+        double v;
+        if (strncmp(s, "all", 3) == 0) {
+            v = -1.0;
+            end = (char *)s + 3;
+        } else {
+            errno = 0;
+            v = strtod(s, &end);
+            if (errno || end == s || !(v >= 0.0 && v < 1e6))
+                return 0;
+        }
+        if (*n == MAX_LIST)
+            return 0;
+        vals[(*n)++] = (float)v;
+        if (*end == ',')
+            end++;
+        else if (*end)
+            return 0;
+        s = end;
+    }
+    return *n > 0;
+}
+
+static void spacing_label(float sp, char *buf, size_t size)
+{
+    if (sp < 0.0f)
+        snprintf(buf, size, "every splat");
+    else if (sp == 0.0f)
+        snprintf(buf, size, "sample points");
+    else
+        snprintf(buf, size, "spacing %g", (double)sp);
+}
+
 static void sort_sizes(size_t *v, int n)
 {
     for (int i = 1; i < n; i++)
@@ -316,8 +362,9 @@ static int parse_options(int argc, char **argv, options *o)
                &o->n_target_photons);
     parse_list(q ? "64" : "64,128", 1, 1ull << 34, o->ks, &o->n_ks);
     parse_list(q ? "64" : "64,128,256", 1, 1ull << 34, o->size_ks, &o->n_size_ks);
-    parse_ints(q ? "4" : "4,16", o->direct, &o->n_direct);
-    parse_ints(q ? "4" : "16", o->size_direct, &o->n_size_direct);
+    parse_ints(q ? "4" : "4,16,32", o->direct, &o->n_direct);
+    parse_ints(q ? "4" : "32", o->size_direct, &o->n_size_direct);
+    parse_spacings("0,all", o->spacings, &o->n_spacings);
     o->direct_photons = q ? 100000 : 1000000;
     o->size_photons = q ? 200000 : 1000000;
     o->size = q ? 48 : 128;
@@ -368,6 +415,9 @@ static int parse_options(int argc, char **argv, options *o)
                 o->n_size_direct = 0;
             else if (!parse_ints(v, o->size_direct, &o->n_size_direct))
                 return fail("--size-direct '%s': want up to %d values in 1..65536 (or none)", v, MAX_LIST);
+        } else if (strcmp(a, "--spacings") == 0) {
+            if (!parse_spacings(v, o->spacings, &o->n_spacings))
+                return fail("--spacings '%s': want up to %d values >= 0 or 'all'", v, MAX_LIST);
         } else if (strcmp(a, "--direct-photons") == 0) {
             if (!parse_long(v, SG_PHOTON_BLOCK, 1L << 34, &lv))
                 return fail("--direct-photons '%s': want %d..2^34", v, SG_PHOTON_BLOCK);
@@ -776,9 +826,9 @@ static sg_status bake_frame(const sg_bake *b, const sg_world *w, const sg_camera
 
 static void print_bake_head(void)
 {
-    printf("  %8s %8s %4s %4s %8s %8s %8s %8s %9s %8s %9s %7s %8s %8s %9s %8s %7s\n", "points", "photons", "k", "dir",
-           "trace_s", "gather_s", "bake_s", "records", "irr_MiB", "ph_MiB", "file_MiB", "save_s", "frame_s",
-           "frameB_s", "relMSE", "wall_s", "energy");
+    printf("  %8s %8s %4s %4s %7s %8s %8s %8s %8s %8s %9s %8s %9s %7s %8s %8s %9s %8s %7s\n", "points", "photons",
+           "k", "dir", "spacing", "samples", "trace_s", "gather_s", "bake_s", "records", "bake_MiB", "ph_MiB",
+           "file_MiB", "save_s", "frame_s", "frameB_s", "relMSE", "wall_s", "energy");
 }
 
 static void print_bake_row(const bake_row *r)
@@ -790,8 +840,9 @@ static void print_bake_row(const bake_row *r)
         snprintf(frame, sizeof frame, "%.3f", r->frame_s);
         snprintf(energy, sizeof energy, "%.4f", r->energy);
     }
-    printf("  %8zu %8zu %4zu %4d %8.2f %8.2f %8.2f %8zu %9.2f %8.1f %9.2f %7.3f %8s %8.3f %9s %8s %7s\n", r->points,
-           r->photons, r->k, r->direct, r->trace_s, r->gather_s, r->bake_s, r->records, (double)r->irr_bytes / 1048576.0,
+    printf("  %8zu %8zu %4zu %4d %7g %8zu %8.2f %8.2f %8.2f %8zu %9.2f %8.1f %9.2f %7.3f %8s %8.3f %9s %8s %7s\n",
+           r->points, r->photons, r->k, r->direct, (double)r->spacing, r->samples, r->trace_s, r->gather_s, r->bake_s,
+           r->records, (double)r->bake_bytes / 1048576.0,
            (double)r->photon_bytes / 1048576.0, (double)r->file_bytes / 1048576.0, r->save_s, frame,
            r->frame_big_s, rel, wall, energy);
 }
@@ -818,9 +869,13 @@ static sg_status measure_bakes(const sg_world *w, const sg_camera *cam, uint64_t
     sg_status st = sg_photons_trace(w, &d.photons, &pm, err);
     if (st != SG_OK)
         return st;
-    for (int i = 0; i < nks && st == SG_OK; i++) {
+    for (int ii = 0; ii < nks * o->n_spacings && st == SG_OK; ii++) {
+        int i = ii / o->n_spacings, si = ii % o->n_spacings;
+        if (direct[i] <= 0 && si > 0)
+            continue; /* no shadow rays: the spacing changes nothing */
         d.gather.k = (unsigned)ks[i];
         d.direct_samples = direct[i];
+        d.sample_spacing = direct[i] > 0 ? o->spacings[si] : 0.0f;
         sg_bake *b = NULL;
         if ((st = sg_bake_create_from_photons(w, &d, &pm, &b, err)) != SG_OK)
             break;
@@ -828,13 +883,14 @@ static sg_status measure_bakes(const sg_world *w, const sg_camera *cam, uint64_t
         sg_bake_get_stats(b, &s);
         bake_row *r = &rows[(*count)];
         *r = (bake_row){.points = points, .splats = s.splats, .photons = photons, .k = ks[i], .direct = direct[i],
+                        .spacing = d.sample_spacing, .samples = s.sample_points, .bake_bytes = s.memory_bytes,
                         .records = s.photon_records, .curve = curve, .trace_s = s.trace_seconds,
                         .gather_s = s.gather_seconds, .bake_s = s.trace_seconds + s.gather_seconds,
-                        .irr_bytes = s.memory_bytes, .photon_bytes = s.photon_memory_bytes, .rel_mse = NAN,
+                        .irr_bytes = s.irradiance_bytes, .photon_bytes = s.photon_memory_bytes, .rel_mse = NAN,
                         .rel_mse_global = NAN, .energy = NAN, .p99 = NAN, .frame_s = NAN};
         char path[4200];
-        snprintf(path, sizeof path, "%s/bake_%zu_%zu_k%zu_d%d.sgbake", o->bake_dir, points, photons, ks[i],
-                 direct[i]);
+        snprintf(path, sizeof path, "%s/bake_%zu_%zu_k%zu_d%d_s%g.sgbake", o->bake_dir, points, photons, ks[i],
+                 direct[i], (double)d.sample_spacing);
         double t0 = omp_get_wtime();
         st = sg_bake_save(b, path, scene_hash, err);
         r->save_s = omp_get_wtime() - t0;
@@ -855,8 +911,8 @@ static sg_status measure_bakes(const sg_world *w, const sg_camera *cam, uint64_t
                 /* A preview beside the bake files, at the reference's exposure. */
                 char png[4200];
                 sg_error ignored;
-                snprintf(png, sizeof png, "%s/bake_%zu_%zu_k%zu_d%d.png", o->bake_dir, points, photons, ks[i],
-                         direct[i]);
+                snprintf(png, sizeof png, "%s/bake_%zu_%zu_k%zu_d%d_s%g.png", o->bake_dir, points, photons, ks[i],
+                         direct[i], (double)d.sample_spacing);
                 if (exposure > 0)
                     sg_image_write_png(&img, png, exposure, &ignored);
                 r->rel_mse = m.rel_mse;
@@ -1006,6 +1062,7 @@ static sg_status retime_target(const sg_world *w, const sg_camera *cam, const op
     d.gather.k = (unsigned)t->bake->k;
     d.gather.threads = o->threads;
     d.direct_samples = t->bake->direct;
+    d.sample_spacing = t->bake->spacing;
     sg_bake_frame_desc fd = {.camera = *cam, .width = o->frame_size, .height = o->frame_size,
                              .threads = o->threads};
     sg_bake *b = NULL;
@@ -1068,8 +1125,11 @@ static const centre_info *find_centre(const report *rp, size_t points)
  *  19 rel_mse_predicted, 20 rel_mse_global, 21 energy_ratio_lum,
  *  22 p99_rel_error, 23 photon_records, 24 irradiance_bytes,
  *  25 photon_bytes, 26 file_bytes, 27 save_s, 28 paths_s, 29 ref_spp,
- *  30 ref_noise_rel_mse, 31 threads, 32 envmap, 33 machine.
- * scripts/bench-bake.sh reads 1, 2, 4, 5, 6, 7, 8, 16, 18, 29, 32.
+ *  30 ref_noise_rel_mse, 31 threads, 32 sample_spacing (shadow-ray bakes:
+ *  0 the material's default, -1 every splat), 33 sample_points,
+ *  34 bake_bytes (all the bake keeps: irradiance, sample points, glossy
+ *  bins), 35 envmap, 36 machine.
+ * scripts/bench-bake.sh reads 1, 2, 4, 5, 6, 7, 8, 16, 18, 29, 32, 35.
  * Figures that do not apply to a row are empty. */
 static void csv_num(FILE *f, const char *fmt, double v)
 {
@@ -1078,7 +1138,7 @@ static void csv_num(FILE *f, const char *fmt, double v)
     fputc(',', f);
 }
 
-static void csv_tail(FILE *f, const report *rp, size_t points, int with_ref)
+static void csv_tail(FILE *f, const report *rp, size_t points, int with_ref, const bake_row *b)
 {
     const centre_info *c = with_ref ? find_centre(rp, points) : NULL;
     if (c)
@@ -1086,6 +1146,10 @@ static void csv_tail(FILE *f, const report *rp, size_t points, int with_ref)
     else
         fputs(",,", f);
     fprintf(f, "%d,", rp->o->threads);
+    if (b)
+        fprintf(f, "%g,%zu,%zu,", (double)b->spacing, b->samples, b->bake_bytes);
+    else
+        fputs(",,,", f);
     const char *slash = strrchr(rp->env_used, '/');
     csv_text(f, slash ? slash + 1 : rp->env_used);
     fputc(',', f);
@@ -1100,12 +1164,12 @@ static void write_csv(FILE *f, const void *ctx)
     fputs("kind,points,splats,photons,k,direct,spp,width,frame_width,trace_s,gather_s,bake_s,frame_s,"
           "frame_big_s,seconds,wall_s,wall_big_s,rel_mse,rel_mse_predicted,rel_mse_global,energy_ratio_lum,"
           "p99_rel_error,photon_records,irradiance_bytes,photon_bytes,file_bytes,save_s,paths_s,ref_spp,"
-          "ref_noise_rel_mse,threads,envmap,machine\n",
+          "ref_noise_rel_mse,threads,sample_spacing,sample_points,bake_bytes,envmap,machine\n",
           f);
     for (int i = 0; i < rp->n_worlds; i++) {
         const world_row *r = &rp->worlds[i];
         fprintf(f, "world,%zu,%zu,,,,,,,,,,,,%.3f,,,,,,,,,,,,,,", r->points, r->splats, r->seconds);
-        csv_tail(f, rp, r->points, 0);
+        csv_tail(f, rp, r->points, 0, NULL);
     }
     for (int i = 0; i < rp->n_bakes; i++) {
         const bake_row *r = &rp->bakes[i];
@@ -1124,7 +1188,7 @@ static void write_csv(FILE *f, const void *ctx)
         csv_num(f, "%.5f", r->curve ? r->energy : NAN);
         csv_num(f, "%.5f", r->curve ? r->p99 : NAN);
         fprintf(f, "%zu,%zu,%zu,%zu,%.4f,,", r->records, r->irr_bytes, r->photon_bytes, r->file_bytes, r->save_s);
-        csv_tail(f, rp, r->points, r->curve);
+        csv_tail(f, rp, r->points, r->curve, r);
     }
     for (int i = 0; i < rp->n_refs; i++) {
         const ref_row *r = &rp->refs[i];
@@ -1140,36 +1204,40 @@ static void write_csv(FILE *f, const void *ctx)
         csv_num(f, "%.5f", r->energy);
         csv_num(f, "%.5f", r->p99);
         fprintf(f, ",,,,,%.1f,", r->paths_s);
-        csv_tail(f, rp, r->points, curve);
+        csv_tail(f, rp, r->points, curve, NULL);
     }
 }
 
 static void md_bake_table(FILE *f, const report *rp, int curve)
 {
     if (curve)
-        fputs("| points | photons | k | direct | trace s | gather s | bake s | frame s | bake + frame s | relMSE | "
-              "global | energy | p99 |\n|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        fputs("| points | photons | k | direct | sample points | trace s | gather s | bake s | frame s | bake + frame s | "
+              "relMSE | global | energy | p99 |\n|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
               f);
     else
-        fputs("| points | splats (all) | photons | k | direct | trace s | gather s | bake s | records | "
-              "irradiance MiB | photon MiB | file MiB | save s | frame s |\n"
-              "|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        fputs("| points | splats (all) | photons | k | direct | sample points | trace s | gather s | bake s | records | "
+              "bake MiB | photon MiB | file MiB | save s | frame s |\n"
+              "|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
               f);
     for (int i = 0; i < rp->n_bakes; i++) {
         const bake_row *r = &rp->bakes[i];
-        char dir[32];
+        char dir[64], sp[32];
+        spacing_label(r->spacing, sp, sizeof sp);
         if (r->direct > 0)
-            snprintf(dir, sizeof dir, "S = %d", r->direct);
+            snprintf(dir, sizeof dir, "S = %d, %s", r->direct, sp);
         else
             snprintf(dir, sizeof dir, "photons");
+        char npts[32] = "-";
+        if (r->samples)
+            snprintf(npts, sizeof npts, "%zu", r->samples);
         if (curve && r->curve)
-            fprintf(f, "| %zu | %zu | %zu | %s | %.2f | %.2f | %.2f | %.3f | %.2f | %.4g | %.4g | %.4f | %.3f |\n",
-                    r->points, r->photons, r->k, dir, r->trace_s, r->gather_s, r->bake_s, r->frame_s,
+            fprintf(f, "| %zu | %zu | %zu | %s | %s | %.2f | %.2f | %.2f | %.3f | %.2f | %.4g | %.4g | %.4f | %.3f |\n",
+                    r->points, r->photons, r->k, dir, npts, r->trace_s, r->gather_s, r->bake_s, r->frame_s,
                     r->bake_s + r->frame_s, r->rel_mse, r->rel_mse_global, r->energy, r->p99);
         else if (!curve)
-            fprintf(f, "| %zu | %zu | %zu | %zu | %s | %.2f | %.2f | %.2f | %zu | %.2f | %.1f | %.2f | %.3f | %.3f |\n",
-                    r->points, r->splats, r->photons, r->k, dir, r->trace_s, r->gather_s, r->bake_s, r->records,
-                    (double)r->irr_bytes / 1048576.0, (double)r->photon_bytes / 1048576.0,
+            fprintf(f, "| %zu | %zu | %zu | %zu | %s | %s | %.2f | %.2f | %.2f | %zu | %.2f | %.1f | %.2f | %.3f | %.3f |\n",
+                    r->points, r->splats, r->photons, r->k, dir, npts, r->trace_s, r->gather_s, r->bake_s, r->records,
+                    (double)r->bake_bytes / 1048576.0, (double)r->photon_bytes / 1048576.0,
                     (double)r->file_bytes / 1048576.0, r->save_s, r->frame_big_s);
     }
 }
@@ -1195,10 +1263,14 @@ static void write_md(FILE *f, const void *ctx)
                "then `sg_bake_create_from_photons` once per (k, direct) on the same map (bake s = trace s + "
                "gather s, what `sg_bake_create` takes). direct: `photons` = `direct_samples` -1, the photons "
                "carry the direct light too and the gather is the kNN estimate alone; `S = n` = the direct light "
-               "by n + n shadow rays per splat (envmap and cosine sampling, bake/direct.h; 16 is the library's "
-               "default), the photons record indirect light only (fewer records), and gather s includes the "
-               "shadow rays, whose cost grows with the splat count. Memory: `sg_bake_get_stats` (irradiance "
-               "arrays kept; photon records while baking, freed). File: `sg_bake_save` to %s (removed after "
+               "by n + n shadow rays per sample point (envmap and cosine sampling, bake/direct.h; 32 is the "
+               "library's default) at `sample points` (bake/samples.h: the material's default spacing, 4 median "
+               "splat radii for these Lambert models, refined twice where the light changes fast, then "
+               "interpolated to every splat: the library's default) or at `every splat` (sample_spacing < 0, "
+               "the bake before sample points), the photons record indirect light only (fewer records), and "
+               "gather s includes the shadow rays, whose cost grows with the number of sample points. Memory "
+               "(bake MiB): `sg_bake_get_stats` memory_bytes, all the bake keeps (irradiance per splat; sample "
+               "points and glossy bins, none for these Lambert models); photon records while baking, freed. File: `sg_bake_save` to %s (removed after "
                "measuring). Frame: `sg_bake_render`, best of %d.\n\n",
             BAKE_SEED, o->bake_dir, o->runs);
     fprintf(f, "## World build\n\n| points | splats (dragon + ground) | world s |\n|---:|---:|---:|\n");
@@ -1271,9 +1343,10 @@ static void write_md(FILE *f, const void *ctx)
         const target_row *t = &rp->targets[i];
         if (!t->bake)
             continue;
-        char dir[32];
+        char dir[80], sp[32];
+        spacing_label(t->bake->spacing, sp, sizeof sp);
         if (t->bake->direct > 0)
-            snprintf(dir, sizeof dir, "S = %d", t->bake->direct);
+            snprintf(dir, sizeof dir, "S = %d, %s (%zu)", t->bake->direct, sp, t->bake->samples);
         else
             snprintf(dir, sizeof dir, "direct light from photons");
         fprintf(f, "| %zu | %s%zu photons, k %zu, %s | %.4g | **%.2f** (%.2f; %.2f) | %.1f%s | **%.1f** | %.1f | "
@@ -1291,10 +1364,12 @@ static void print_target(const options *o, const target_row *t)
         return;
     printf("target, %zu points: ", t->points);
     if (t->bake_found)
-        printf("bake reaches relMSE %.5f <= %g with %zu photons, k %zu, direct %d: bake %.2f s + %dx%d frame %.3f s "
+        printf("bake reaches relMSE %.5f <= %g with %zu photons, k %zu, direct %d, sample spacing %g (%zu points): "
+               "bake %.2f s + %dx%d frame %.3f s "
                "= %.2f s; + %dx%d frame %.3f s = %.2f s; again (sg_bake_create + sg_bake_render %dx%d): %.2f s; "
                "taken: %.2f s\n",
-               t->bake->rel_mse, o->target, t->bake->photons, t->bake->k, t->bake->direct, t->bake->bake_s,
+               t->bake->rel_mse, o->target, t->bake->photons, t->bake->k, t->bake->direct, (double)t->bake->spacing,
+               t->bake->samples, t->bake->bake_s,
                o->size, o->size, t->bake->frame_s, t->bake_wall, o->frame_size, o->frame_size,
                t->bake->frame_big_s, t->first_wall_big, o->frame_size, o->frame_size, t->retime_s,
                t->bake_wall_big);
@@ -1483,7 +1558,7 @@ int main(int argc, char **argv)
                     add_combos(cs, &ncs, o.size_ks, o.n_size_ks, &carry, 1);
                     add_combos(cs, &ncs, o.size_ks, 1, o.size_direct, o.n_size_direct);
                 }
-                if (nb + ncs > MAX_BAKES) {
+                if (nb + ncs * o.n_spacings > MAX_BAKES) {
                     status = fail("too many bakes (at most %d)", MAX_BAKES);
                     break;
                 }

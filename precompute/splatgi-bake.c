@@ -1,6 +1,6 @@
 /* splatgi-bake — the bake program: reads a scene file, traces the photon
  * pass in chunks with a progress display, gathers irradiance at every
- * splat and writes the .sgbake file atomically. Ctrl-C stops at the next
+ * splat (direct light at sample points, glossy bins) and writes the .sgbake file atomically. Ctrl-C stops at the next
  * photon block and writes a checkpoint (OUT.ckpt) that --resume continues;
  * the resumed bake is the same file, byte for byte, as one run straight
  * through. Options, library calls and a report; the algorithms live in
@@ -30,6 +30,11 @@ static const char usage[] =
     "  --k K             photons per irradiance estimate, 1..1024 (default 64)\n"
     "  --seed S          random seed (default 1)\n"
     "  --max-depth D     surface interactions per photon (default 8)\n"
+    "  --sample-spacing X  spacing of the sample points (direct light, glossy bins) in\n"
+    "                    median splat radii (default: from the material, 4 diffuse,\n"
+    "                    2 + 2 roughness glossy); 'all' or a negative X: every splat\n"
+    "  --glossy-res R    glossy bins per side, 4..32 (default: from the roughness)\n"
+    "  --glossy-rays M   rays per glossy sample point (default 128)\n"
     "  --threads T       OpenMP threads (default: all); results do not depend on it\n"
     "  --if-stale        do nothing when OUT already holds a bake of this scene with\n"
     "                    these parameters and this format (checked by its header)\n"
@@ -161,6 +166,25 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--max-depth")) {
             if (!parse_u64(a, v, 1, 1024, &n)) return 1;
             o->desc.photons.max_depth = (int)n;
+            ++i;
+        } else if (!strcmp(a, "--sample-spacing")) {
+            char *end = NULL;
+            double x = v ? strtod(v, &end) : 0.0;
+            if (v && !strcmp(v, "all"))
+                x = -1.0, end = (char *)v + 3;
+            if (!v || !end || *end || end == v || !(x == x) || x == 0.0 || x > 1e6) {
+                fprintf(stderr, "splatgi-bake: %s: '%s' is not a positive number or 'all'\n", a, v ? v : "");
+                return 1;
+            }
+            o->desc.sample_spacing = (float)x;
+            ++i;
+        } else if (!strcmp(a, "--glossy-res")) {
+            if (!parse_u64(a, v, 4, 32, &n)) return 1;
+            o->desc.glossy_res = (int)n;
+            ++i;
+        } else if (!strcmp(a, "--glossy-rays")) {
+            if (!parse_u64(a, v, 1, 1 << 20, &n)) return 1;
+            o->desc.glossy_rays = (int)n;
             ++i;
         } else if (!strcmp(a, "--threads")) {
             if (!parse_u64(a, v, 1, 4096, &n)) return 1;
@@ -354,14 +378,36 @@ int main(int argc, char **argv)
            traced, t_trace, t_trace > 0 ? (double)traced / t_trace * 1e-6 : 0.0, records,
            (double)bs.rays.rays * 1e-6);
     printf("  %-18s k = %u, normal_cos = %g, %.2f s\n", "gather", d.gather.k, (double)d.gather.normal_cos,
-           t_gather - bs.direct_seconds);
+           t_gather - bs.direct_seconds - bs.glossy_seconds);
     if (d.direct_samples > 0)
-        printf("  %-18s %d + %d shadow rays per splat, %.2f s\n", "direct light", d.direct_samples, d.direct_samples,
-               bs.direct_seconds);
+        printf("  %-18s %d + %d shadow rays per sample point, %.2f s (with choosing and interpolating them)\n",
+               "direct light", d.direct_samples, d.direct_samples, bs.direct_seconds);
+    if (bs.glossy_points)
+        printf("  %-18s %zu sample points, %d rays each, %.2f s\n", "glossy bins", bs.glossy_points,
+               d.glossy_rays, bs.glossy_seconds);
     printf("  %-18s %.2f s\n", "write", t_write);
     printf("  %-18s %.2f s (world %.2f s)\n", "total", omp_get_wtime() - t_start, t_world);
+    printf("  %-18s %zu of %zu splats (%.2f%%)%s\n", "sample points", bs.sample_points, bs.splats,
+           bs.splats ? 100.0 * (double)bs.sample_points / (double)bs.splats : 0.0,
+           d.sample_spacing < 0.0f ? ", every splat (--sample-spacing all)" : "");
+    for (size_t m = 0; m < models; ++m) {
+        int res = 0;
+        size_t gc = 0;
+        const uint32_t *gs, *gn;
+        const uint16_t *gb;
+        sg_bake_glossy_data(bake, (uint32_t)m, &res, &gc, &gs, &gn, &gb);
+        printf("    model %-10zu %zu sample points of %zu splats", m, sg_bake_sample_count(bake, (uint32_t)m),
+               sg_scene_points(sg_world_scene(world, (uint32_t)m))->count);
+        if (res)
+            printf(", glossy bins %d x %d", res, res);
+        printf("\n");
+    }
     printf("  %-18s %.1f MiB (freed before the write)\n", "photon records", mib(bs.photon_memory_bytes));
-    printf("  %-18s %.1f MiB (%zu splats x 3 floats)\n", "irradiance", mib(bs.memory_bytes), bs.splats);
+    printf("  %-18s %.1f MiB (%zu splats x 3 floats)\n", "irradiance", mib(bs.irradiance_bytes), bs.splats);
+    printf("  %-18s %.1f MiB (glossy models: sample point per splat, splat per sample point)\n", "sample points",
+           mib(bs.sample_bytes));
+    printf("  %-18s %.1f MiB (%zu points x 3 R^2 halves)\n", "glossy bins", mib(bs.glossy_bytes), bs.glossy_points);
+    printf("  %-18s %.1f MiB\n", "bake memory", mib(bs.memory_bytes));
     rc = 0;
 done:
     sg_bake_destroy(bake);

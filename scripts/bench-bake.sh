@@ -89,10 +89,11 @@ for ci in "${!curve_sizes[@]}"; do
   done
   # Bakes with the direct light by shadow rays (S samples per strategy).
   f="$tmpd/direct_$p.dat"
-  awk -F, -v p="$p" '$1 == "bake" && $2 == p && $6 > 0 && $18 != "" { print $6, $16, $18, $5, $4 }' "$csv" | sort -n -k4,4 -k5,5 -k1,1 >"$f"
+  # Column 6 of the data: 1 = every splat a sample point, 0 = sample points.
+  awk -F, -v p="$p" '$1 == "bake" && $2 == p && $6 > 0 && $18 != "" { print $6, $16, $18, $5, $4, ($32 < 0) }' "$csv" | sort -n -k4,4 -k5,5 -k1,1 >"$f"
   if [ -s "$f" ]; then
-    plots+=("\"$f\" using 2:3 with points pt 9 ps 1.8 lc rgb \"$c\" title \"bake + frame, $label points, k $(awk '{ print $4; exit }' "$f"), direct light by S shadow rays per splat, indirect by photons\"")
-    plots+=("\"$f\" using 2:3:(sprintf(\"S %d, %gM\", \$1, \$5 / 1e6)) with labels offset char 0,-0.9 font \",8\" tc rgb \"$c\" notitle")
+    plots+=("\"$f\" using 2:3 with points pt 9 ps 1.8 lc rgb \"$c\" title \"bake + frame, $label points, k $(awk '{ print $4; exit }' "$f"), direct light by S shadow rays per sample point (sparse) or per splat (all), indirect by photons\"")
+    plots+=("\"$f\" using 2:3:(sprintf(\"S %d %s, %gM\", \$1, \$6 > 0 ? \"all\" : \"sparse\", \$5 / 1e6)) with labels offset char 0,-0.9 font \",8\" tc rgb \"$c\" notitle")
   fi
   # The largest size: its reference renderer at the frame size (512x512),
   # spp x pixels / sg_ref_render's measured paths/s: the target's yardstick.

@@ -3,15 +3,21 @@
  * What it does: one photon-style pass from the environment map through the
  * models' hierarchies (bake/photons.h) records where light lands after one
  * or more bounces; a gather (bake/irradiance.h) turns the records into
- * indirect irradiance at every splat, and shadow rays towards the envmap
- * (bake/direct.h) add the direct irradiance, so E = direct + indirect.
- * (With direct_samples < 0 the photons carry the direct light too.) Looking up a hit interpolates E over the
- * splats around it with the surface's own MLS weights
- * (sg_scene_hit_weights), so the baked light is as smooth as the surface,
- * and applies the material: L_o = emission + rho(x) / pi * E.
- * What it does not do (yet): directional bins for glossy highlights — a
- * glossy material's lobe is looked up as if diffuse (its albedo is kept,
- * its highlight is not).
+ * indirect irradiance at every splat. The direct irradiance comes from
+ * shadow rays towards the envmap (bake/direct.h) at SAMPLE POINTS, a
+ * subset of the splats chosen per model by a spacing from the material and
+ * refined where the light changes fast (bake/samples.h), and is
+ * interpolated to every splat, so E = direct + indirect per splat. (With
+ * direct_samples < 0 the photons carry the direct light too.) Glossy
+ * (GGX) models also get directional bins of the lobe-filtered incident
+ * radiance S(wo) at their sample points (bake/glossy.h). Looking up a hit
+ * interpolates E over the splats around it with the surface's own MLS
+ * weights (sg_scene_hit_weights), so the baked light is as smooth as the
+ * surface, and applies the material:
+ *     Lambert:  L_o = emission + rho(x) / pi * E
+ *     GGX:      L_o = emission + (1 - k) rho(x) / pi * E + k S(wo),
+ * S blended over the sample points the hit's splats map to, with the same
+ * weights.
  *
  * States: CREATED by sg_bake_create (traced and gathered), by
  * sg_bake_create_from_photons (gathered from a photon map traced in
@@ -40,25 +46,42 @@ typedef struct sg_bake sg_bake; /* opaque */
 typedef struct sg_bake_desc {
     sg_photon_desc photons;      /* count, seed, depth (photons.h defaults) */
     sg_irradiance_desc gather;   /* k, normal_cos (irradiance.h defaults)    */
-    int direct_samples;          /* direct light by shadow rays at every splat
-                                    (bake/direct.h), samples per splat per
-                                    strategy; default 16; < 0: none, the
+    int direct_samples;          /* direct light by shadow rays at the sample
+                                    points (bake/direct.h), samples per point
+                                    per strategy; default 32; < 0: none, the
                                     photons carry the direct light as well   */
+    float sample_spacing;        /* spacing of the sample points, a multiple
+                                    of each model's median splat radius;
+                                    0: from the material (samples.h: 4
+                                    diffuse, 2 + 2 roughness glossy);
+                                    < 0: every splat is a sample point      */
+    int glossy_res;              /* glossy bins per side, 4..32; 0: from
+                                    the roughness (glossy.h, 4..32)          */
+    int glossy_rays;             /* rays per glossy sample point; default
+                                    128                                      */
 } sg_bake_desc;
 
 /* Figures of a bake. (Not sg_bake_info: that name is the bake file's
  * header, bake_file.h.) */
 typedef struct sg_bake_stats {
     size_t models;
-    size_t splats;             /* sample points: every splat of every model */
+    size_t splats;             /* every splat of every model                 */
+    size_t sample_points;      /* all models (sg_bake_sample_count per model) */
+    size_t glossy_points;      /* sample points with glossy bins             */
     size_t photons_shot;
     size_t photon_records;
     sg_ray_stats rays;         /* of the photon pass                         */
     double trace_seconds, gather_seconds;  /* 0 for a loaded bake; gather
                                               includes the direct light    */
-    double direct_seconds;     /* the shadow rays of the direct light (part
+    double direct_seconds;     /* sample selection, the shadow rays of the
+                                  direct light and its interpolation (part
                                   of gather_seconds); 0 for a loaded bake    */
-    size_t memory_bytes;       /* the irradiance arrays                      */
+    double glossy_seconds;     /* the glossy bins (part of gather_seconds)   */
+    size_t memory_bytes;       /* all kept: the sum of the three below       */
+    size_t irradiance_bytes;   /* E: 3 floats per splat                      */
+    size_t sample_bytes;       /* kept per glossy model: the splat of each
+                                  sample point and each splat's sample (u32)  */
+    size_t glossy_bytes;       /* the bins: 3 R^2 halves per glossy point    */
     size_t photon_memory_bytes;/* the photon records while baking (freed)    */
 } sg_bake_stats;
 
@@ -87,8 +110,9 @@ sg_bake_desc sg_bake_desc_resolve(const sg_bake_desc *d);
 sg_bake_desc sg_bake_get_desc(const sg_bake *b);
 
 /* 64-bit FNV-1a of the parameters that change a bake's values: photon
- * count, seed, max depth, Russian roulette depth, k, normal_cos and
- * SG_PHOTON_BLOCK, after defaults (so spelling a default out changes
+ * count, seed, max depth, Russian roulette depth, k, normal_cos,
+ * SG_PHOTON_BLOCK, direct samples, sample spacing (float bits), glossy
+ * resolution and rays, after defaults (so spelling a default out changes
  * nothing), as little-endian u64 (normal_cos: its float bits). Threads and
  * progress do not count: results ignore them. Never 0. */
 uint64_t sg_bake_param_hash(const sg_bake_desc *d);
@@ -99,6 +123,16 @@ size_t sg_bake_model_count(const sg_bake *b);
  * sg_scene_points(sg_world_scene(w, m)); *splats gets the splat count.
  * Owned by the bake. m < sg_bake_model_count(b). */
 const float *sg_bake_irradiance_data(const sg_bake *b, uint32_t m, size_t *splats);
+
+/* Sample points of model m (every splat when sample_spacing < 0). */
+size_t sg_bake_sample_count(const sg_bake *b, uint32_t m);
+
+/* Model m's glossy bins: *res = bins per side (0: the model has none, and
+ * the other outputs are left alone), *count sample points, *splat the
+ * splat of each (count u32), *nearest each splat's sample (u32 per splat),
+ * *bins 3 res^2 halves per sample (glossy.h). Owned by the bake. */
+void sg_bake_glossy_data(const sg_bake *b, uint32_t m, int *res, size_t *count, const uint32_t **splat,
+                         const uint32_t **nearest, const uint16_t **bins);
 
 /* Interpolated irradiance at a hit (RGB, W/m^2). */
 sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h);
@@ -124,5 +158,11 @@ sg_status sg_bake_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
 sg_status sg_bake__new(size_t models, const size_t *counts, const sg_bake_desc *d, const sg_bake_stats *s,
                        sg_bake **out, sg_error *err);
 float *sg_bake__irradiance(sg_bake *b, uint32_t m);
+/* For bake_io.c only: model m's sample count, and room for its glossy
+ * bins (res per side, count samples); the arrays to fill through
+ * sg_bake__glossy. Call before the bake is used; stats follow. */
+void sg_bake__set_samples(sg_bake *b, uint32_t m, size_t samples);
+sg_status sg_bake__alloc_glossy(sg_bake *b, uint32_t m, int res, size_t count, sg_error *err);
+void sg_bake__glossy(sg_bake *b, uint32_t m, uint32_t **splat, uint32_t **nearest, uint16_t **bins);
 
 #endif

@@ -6,8 +6,8 @@
  *     parameters, the irradiance or records and the ray counts: nothing
  *     timed and nothing that depends on the thread count goes in, so equal
  *     bakes are equal files (what makes resume checkable with cmp);
- *  2. META elements 1..7 hash (sg_bake_param_hash) to the header's
- *     parameter hash; load refuses a file where they do not;
+ *  2. META elements 1..7 and 19..22 hash (sg_bake_param_hash) to the
+ *     header's parameter hash; load refuses a file where they do not;
  *  3. bytes from a file reach no assert: each value is range-checked and a
  *     failure is SG_ERR_CORRUPT naming the file, section, model or record;
  *  4. load builds nothing the caller sees until every check passed: *out is
@@ -22,14 +22,16 @@
 #include <string.h>
 
 #include "bake/bake_file.h"
+#include "bake/glossy.h"
 #include "core/alloc.h"
 
 enum {
     META_VERSION = 0, META_COUNT, META_SEED, META_MAX_DEPTH, META_RR_DEPTH, META_K, META_NORMAL_COS,
     META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */,
-    META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */
+    META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */,
+    META_SPACING, META_GLOSSY_RES, META_GLOSSY_RAYS, META_SAMPLES
 };
-#define META_LAYOUT 2u
+#define META_LAYOUT 3u
 
 /* CNTS is read straight into the size_t counts sg_bake__new takes. */
 _Static_assert(sizeof(size_t) == sizeof(uint64_t), "bake_io.c assumes a 64-bit size_t");
@@ -38,7 +40,7 @@ static const char *const rec_tags[13] = {"PHPX", "PHPY", "PHPZ", "PHNX", "PHNY",
                                          "PHWY", "PHWZ", "PHFR", "PHFG", "PHFB", "PHMD"};
 
 static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, size_t blocks, size_t shot,
-                     size_t records, size_t models, size_t splats, const sg_ray_stats *rays)
+                     size_t records, size_t models, size_t splats, size_t samples, const sg_ray_stats *rays)
 {
     uint32_t cos_bits;
     memcpy(&cos_bits, &d->gather.normal_cos, sizeof cos_bits);
@@ -59,6 +61,12 @@ static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, s
     const uint64_t r[6] = {rays->rays, rays->nodes, rays->leaves, rays->isects, rays->splats, rays->hits};
     memcpy(meta + META_RAYS, r, sizeof r);
     meta[META_DIRECT] = (uint64_t)(int64_t)d->direct_samples;
+    uint32_t sp_bits;
+    memcpy(&sp_bits, &d->sample_spacing, sizeof sp_bits);
+    meta[META_SPACING] = sp_bits;
+    meta[META_GLOSSY_RES] = (uint64_t)d->glossy_res;
+    meta[META_GLOSSY_RAYS] = (uint64_t)d->glossy_rays;
+    meta[META_SAMPLES] = samples;
 }
 
 static void describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
@@ -83,11 +91,15 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
     if (st != SG_OK)
         return st;
     if (meta[META_VERSION] != META_LAYOUT)
-        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: section META: layout %" PRIu64 ", this build reads %u",
-                            path, meta[META_VERSION], META_LAYOUT);
-    uint32_t cos_bits = (uint32_t)meta[META_NORMAL_COS];
-    float normal_cos;
+        return sg_error_set(err, SG_ERR_UNSUPPORTED,
+                            "%s: section META: layout %" PRIu64 ", this build reads %u (%s; bake again)", path,
+                            meta[META_VERSION], META_LAYOUT,
+                            meta[META_VERSION] < META_LAYOUT ? "made before sample points and glossy bins"
+                                                             : "made by a newer build");
+    uint32_t cos_bits = (uint32_t)meta[META_NORMAL_COS], sp_bits = (uint32_t)meta[META_SPACING];
+    float normal_cos, spacing;
     memcpy(&normal_cos, &cos_bits, sizeof normal_cos);
+    memcpy(&spacing, &sp_bits, sizeof spacing);
     const char *bad = NULL;
     if (meta[META_COUNT] < 1 || meta[META_COUNT] > ((uint64_t)1 << 34)) bad = "photon count";
     else if (meta[META_SEED] == 0) bad = "seed";
@@ -101,6 +113,13 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
     else if ((int64_t)meta[META_DIRECT] < -1 || (int64_t)meta[META_DIRECT] == 0 ||
              (int64_t)meta[META_DIRECT] > INT32_MAX)
         bad = "direct samples";
+    else if (meta[META_SPACING] > UINT32_MAX || !(spacing == -1.0f || (spacing >= 0.0f && spacing < 1e6f)))
+        bad = "sample spacing";
+    else if (meta[META_GLOSSY_RES] != 0 &&
+             (meta[META_GLOSSY_RES] < SG_GLOSSY_MIN_RES || meta[META_GLOSSY_RES] > SG_GLOSSY_MAX_RES))
+        bad = "glossy resolution";
+    else if (meta[META_GLOSSY_RAYS] < 1 || meta[META_GLOSSY_RAYS] > INT32_MAX)
+        bad = "glossy rays";
     if (bad)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %s is out of range", path, bad);
     *d = (sg_bake_desc){.photons = {.count = (size_t)meta[META_COUNT],
@@ -108,7 +127,10 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
                                     .max_depth = (int)meta[META_MAX_DEPTH],
                                     .rr_depth = (int)meta[META_RR_DEPTH]},
                         .gather = {.k = (unsigned)meta[META_K], .normal_cos = normal_cos},
-                        .direct_samples = (int)(int64_t)meta[META_DIRECT]};
+                        .direct_samples = (int)(int64_t)meta[META_DIRECT],
+                        .sample_spacing = spacing,
+                        .glossy_res = (int)meta[META_GLOSSY_RES],
+                        .glossy_rays = (int)meta[META_GLOSSY_RAYS]};
     uint64_t h = 0;
     if (meta[META_BLOCK] == SG_PHOTON_BLOCK)
         h = sg_bake_param_hash(d);
@@ -146,34 +168,132 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
     sg_bake_get_stats(b, &stats);
     uint64_t meta[SG_BAKE_META_COUNT];
     put_meta(meta, &d, sg_photon_block_count(&d.photons), stats.photons_shot, stats.photon_records, models,
-             stats.splats, &stats.rays);
-    uint64_t *counts = sg_alloc_array(models, sizeof *counts);
+             stats.splats, stats.sample_points, &stats.rays);
+    uint64_t *counts = sg_alloc_array(3 * models, sizeof *counts);
     if (!counts)
         return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", path);
+    uint64_t *samples = counts + models, *gres = counts + 2 * models;
+    size_t sections = models + 4;
     for (size_t m = 0; m < models; ++m) {
         size_t n;
         sg_bake_irradiance_data(b, (uint32_t)m, &n);
         counts[m] = n;
+        samples[m] = sg_bake_sample_count(b, (uint32_t)m);
+        int res;
+        size_t gc;
+        const uint32_t *gs, *gn;
+        const uint16_t *gb;
+        sg_bake_glossy_data(b, (uint32_t)m, &res, &gc, &gs, &gn, &gb);
+        gres[m] = (uint64_t)res;
+        sections += res ? 3 : 0;
+    }
+    if (sections > SG_BAKE_MAX_SECTIONS) {
+        sg_free(counts);
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: %zu sections (models and glossy bins); a bake file holds "
+                                                     "at most %u", path, sections, SG_BAKE_MAX_SECTIONS);
     }
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc wd = {.path = path, .scene_hash = scene_hash, .param_hash = sg_bake_param_hash(&d),
-                              .max_sections = (uint32_t)models + 2};
+                              .max_sections = (uint32_t)sections};
     sg_status st = sg_bake_writer_create(&wd, &w, err);
     if (st == SG_OK)
         st = sg_bake_writer_add_section(w, "META", SG_BAKE_TYPE_U64, SG_BAKE_META_COUNT, meta, err);
     if (st == SG_OK)
         st = sg_bake_writer_add_section(w, "CNTS", SG_BAKE_TYPE_U64, models, counts, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_add_section(w, "SCNT", SG_BAKE_TYPE_U64, models, samples, err);
+    if (st == SG_OK)
+        st = sg_bake_writer_add_section(w, "GRES", SG_BAKE_TYPE_U64, models, gres, err);
     for (size_t m = 0; m < models && st == SG_OK; ++m) {
         char tag[8];
         snprintf(tag, sizeof tag, "E%03X", (unsigned)m);
         st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_F32, 3 * counts[m],
                                         sg_bake_irradiance_data(b, (uint32_t)m, NULL), err);
+        if (st != SG_OK || !gres[m])
+            continue;
+        int res;
+        size_t gc;
+        const uint32_t *gs, *gn;
+        const uint16_t *gb;
+        sg_bake_glossy_data(b, (uint32_t)m, &res, &gc, &gs, &gn, &gb);
+        snprintf(tag, sizeof tag, "P%03X", (unsigned)m);
+        st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_U32, gc, gs, err);
+        if (st == SG_OK) {
+            snprintf(tag, sizeof tag, "N%03X", (unsigned)m);
+            st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_U32, counts[m], gn, err);
+        }
+        if (st == SG_OK) {
+            snprintf(tag, sizeof tag, "G%03X", (unsigned)m);
+            st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_F16, gc * 3 * (uint64_t)res * (uint64_t)res, gb,
+                                            err);
+        }
     }
     if (st == SG_OK)
         st = sg_bake_writer_commit(w, err);
     sg_bake_writer_destroy(w);
     sg_free(counts);
     return st;
+}
+
+/* A U64 section of n values (SCNT, GRES): one per model. */
+static sg_status read_u64s(const sg_bake_file *f, const char *path, const char *tag, size_t n, uint64_t *out,
+                           sg_error *err)
+{
+    const sg_bake_section *s = sg_bake_file_find(f, tag);
+    if (!s || s->type != SG_BAKE_TYPE_U64 || s->count != n)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s is %s (expected %zu u64 values)", path, tag,
+                            s ? "of the wrong type or length" : "missing", n);
+    return sg_bake_file_read(f, tag, out, n * sizeof *out, err);
+}
+
+/* Model m's glossy sections (P: sample splats, N: per-splat sample, G:
+ * bins), read into b and checked (invariant 3). */
+static sg_status read_glossy(const sg_bake_file *f, const char *path, sg_bake *b, uint32_t m, int res,
+                             uint64_t samples, uint64_t splats, sg_error *err)
+{
+    char tp[8], tn[8], tg[8];
+    snprintf(tp, sizeof tp, "P%03X", (unsigned)m);
+    snprintf(tn, sizeof tn, "N%03X", (unsigned)m);
+    snprintf(tg, sizeof tg, "G%03X", (unsigned)m);
+    const sg_bake_section *sp = sg_bake_file_find(f, tp), *sn = sg_bake_file_find(f, tn),
+                          *sgb = sg_bake_file_find(f, tg);
+    uint64_t nbins = samples * 3 * (uint64_t)res * (uint64_t)res;
+    const char *bad = !sp || sp->type != SG_BAKE_TYPE_U32 || sp->count != samples ? tp
+                      : !sn || sn->type != SG_BAKE_TYPE_U32 || sn->count != splats ? tn
+                      : !sgb || sgb->type != SG_BAKE_TYPE_F16 || sgb->count != nbins ? tg
+                                                                                     : NULL;
+    if (bad)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: section %s is missing or of the wrong type or length (model %u: %" PRIu64
+                            " glossy sample points of %d x %d bins, %" PRIu64 " splats)",
+                            path, bad, m, samples, res, res, splats);
+    /* sizes are bounded by the file now (bake_file.h checked each section) */
+    sg_status st = sg_bake__alloc_glossy(b, m, res, (size_t)samples, err);
+    if (st != SG_OK)
+        return st;
+    uint32_t *ps, *pn;
+    uint16_t *pb;
+    sg_bake__glossy(b, m, &ps, &pn, &pb);
+    if ((st = sg_bake_file_read(f, tp, ps, sp->size, err)) != SG_OK ||
+        (st = sg_bake_file_read(f, tn, pn, sn->size, err)) != SG_OK ||
+        (st = sg_bake_file_read(f, tg, pb, sgb->size, err)) != SG_OK)
+        return st;
+    for (uint64_t j = 0; j < samples; ++j)
+        if (ps[j] >= splats)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s: sample point %" PRIu64 " names splat %" PRIu32
+                                                     " of %" PRIu64, path, tp, j, ps[j], splats);
+    for (uint64_t i = 0; i < splats; ++i)
+        if (pn[i] >= samples)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s: splat %" PRIu64 " names sample point %" PRIu32
+                                                     " of %" PRIu64, path, tn, i, pn[i], samples);
+    for (uint64_t k = 0; k < nbins; ++k)
+        if ((pb[k] & 0x8000u) || (pb[k] & 0x7c00u) == 0x7c00u)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s: sample point %" PRIu64 ", bin %" PRIu64
+                                                     ": value is %s",
+                                path, tg, k / (3 * (uint64_t)res * (uint64_t)res),
+                                k / 3 % ((uint64_t)res * (uint64_t)res),
+                                (pb[k] & 0x7c00u) == 0x7c00u ? "not finite" : "negative");
+    return SG_OK;
 }
 
 sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash, sg_bake **out, sg_error *err)
@@ -254,6 +374,36 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
             }
         }
     }
+    uint64_t *per = NULL; /* SCNT then GRES */
+    if (!(per = sg_alloc_array(2 * models, sizeof *per))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", path);
+        goto done;
+    }
+    if ((st = read_u64s(f, path, "SCNT", models, per, err)) != SG_OK ||
+        (st = read_u64s(f, path, "GRES", models, per + models, err)) != SG_OK)
+        goto free_per;
+    uint64_t samples = 0;
+    for (size_t m = 0; m < models && st == SG_OK; ++m) {
+        uint64_t ns = per[m], res = per[models + m];
+        if (ns > counts[m] || (res && (res < SG_GLOSSY_MIN_RES || res > SG_GLOSSY_MAX_RES || ns == 0))) {
+            st = sg_error_set(err, SG_ERR_CORRUPT,
+                              "%s: model %zu: %" PRIu64 " sample points of %" PRIu64 " splats, glossy resolution %"
+                              PRIu64 " do not fit",
+                              path, m, ns, counts[m], res);
+            break;
+        }
+        samples += ns;
+        sg_bake__set_samples(b, (uint32_t)m, (size_t)ns);
+        if (res)
+            st = read_glossy(f, path, b, (uint32_t)m, (int)res, ns, counts[m], err);
+    }
+    if (st == SG_OK && samples != meta[META_SAMPLES])
+        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %" PRIu64 " sample points, SCNT adds up to %" PRIu64,
+                          path, meta[META_SAMPLES], samples);
+free_per:
+    sg_free(per);
+    if (st != SG_OK)
+        goto done;
     *out = b;
     b = NULL;
 done:
@@ -269,7 +419,7 @@ sg_status sg_bake_checkpoint_save(const char *path, const sg_bake_desc *desc, co
     assert(path && m);
     sg_bake_desc d = sg_bake_desc_resolve(desc);
     uint64_t meta[SG_BAKE_META_COUNT];
-    put_meta(meta, &d, m->blocks, m->shot, m->count, 0, 0, &m->rays);
+    put_meta(meta, &d, m->blocks, m->shot, m->count, 0, 0, 0, &m->rays);
     const void *arrays[13] = {m->px, m->py, m->pz, m->nx, m->ny, m->nz, m->wx,
                               m->wy, m->wz, m->fr, m->fg, m->fb, m->model};
     sg_bake_writer *w = NULL;

@@ -19,10 +19,18 @@
  * Sections of a bake (flags 0):
  *   META  U64 x 24  the parameters and figures, layout below
  *   CNTS  U64 x M   splats per model, M = number of models
+ *   SCNT  U64 x M   sample points per model (bake/samples.h)
+ *   GRES  U64 x M   glossy bins per side per model, 0: no bins
  *   Emmm  F32 x 3n  model mmm's irradiance, RGB per splat, W/m^2, in the
  *                   order of sg_scene_points(sg_world_scene(w, m)); mmm is
  *                   the model index in 3 upper-case hex digits: "E000",
  *                   "E001", ... "E00A"; at most SG_BAKE_IO_MAX_MODELS models
+ *   for each model mmm with GRES > 0 (R = GRES, P = SCNT), after its Emmm:
+ *   Pmmm  U32 x P   the splat of each glossy sample point (< n)
+ *   Nmmm  U32 x n   each splat's sample point (< P)
+ *   Gmmm  F16 x 3 P R^2  the bins, sample point by sample point, bin
+ *                   (i, j) at 3 (j R + i), RGB (bake/glossy.h), finite >= 0
+ *   (a file holds at most SG_BAKE_MAX_SECTIONS sections in all)
  * Sections of a checkpoint (flags SG_BAKE_FLAG_CHECKPOINT):
  *   META  U64 x 24  as for a bake; [8] says which blocks are done: the
  *                   records are those of blocks [0, META[8]) exactly
@@ -39,17 +47,30 @@
  *    4 Russian roulette depth   12 splats, all models (0 in a checkpoint)
  *    5 k                        13..18 ray stats: rays, nodes, leaves,
  *    6 normal_cos (f32 bits)           isects, splats, hits
- *    7 SG_PHOTON_BLOCK          19 direct samples per splat (int64;
- *                                  -1: none, photons carry direct light)
- *                               20..23 0
- * Elements 0 is the META layout (2). Elements 1..7 and 19 hash to the
- * header's parameter hash (checked on load).
+ *    7 SG_PHOTON_BLOCK          19 direct samples per sample point
+ *                                  (int64; -1: none, photons carry it)
+ *                               20 sample spacing (f32 bits; 0 from the
+ *                                  material, -1 every splat)
+ *                               21 glossy bins per side (0: from the
+ *                                  roughness)
+ *                               22 glossy rays per sample point
+ *                               23 sample points, all models (0 in a
+ *                                  checkpoint)
+ * Element 0 is the META layout: 3. Layout 2 (before sample points and
+ * glossy bins: elements 20..23 were 0) is refused with SG_ERR_UNSUPPORTED
+ * and a message to bake again: its values were made at every splat with
+ * another parameter set, so reading it as layout 3 would mislabel it.
+ * Elements 1..7 and 19..22 hash to the header's parameter hash (checked on
+ * load).
  *
  * Errors (messages begin with the path):
  *  SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED  from bake_file.h, and
  *    SG_ERR_CORRUPT for a META that contradicts the header or itself, a
  *    value that is not finite or is negative ("x.sgbake: model 0, splat
- *    17: irradiance is nan"), a record on a model the world lacks;
+ *    17: irradiance is nan"; "x.sgbake: section G000: sample point 3,
+ *    bin 41: value is not finite"), an index out of range ("section N000:
+ *    splat 17 names sample point 4294967295 of 212"), a record on a model
+ *    the world lacks;
  *  SG_ERR_INVALID_ARG  another scene (bake_file.h's message); a model or
  *    splat count that differs from the world ("x.sgbake: model 1 has 30000
  *    splats in the bake, 31000 in the scene"); a checkpoint given as a bake

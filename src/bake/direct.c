@@ -1,6 +1,6 @@
 /* direct.c — direct irradiance at the splats (see direct.h).
  *
- * Invariant: every added value is finite and >= 0 (NaN-producing samples,
+ * Invariant: every value is finite and >= 0 (NaN-producing samples,
  * e.g. a zero pdf, are skipped, never added).
  */
 #include "bake/direct.h"
@@ -25,63 +25,69 @@ static sg_vec3 to_world(sg_vec3 n, sg_vec3 v)
     return sg_v3_add(sg_v3_add(sg_v3_scale(t, v.x), sg_v3_scale(b, v.y)), sg_v3_scale(n, v.z));
 }
 
-sg_status sg_direct_irradiance_add(const sg_world *w, int samples, uint64_t seed, int threads, float **E,
-                                   sg_error *err)
+sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t *splats, size_t n,
+                                  uint64_t key_base, int samples, uint64_t seed, int threads, float *out,
+                                  float *sigma, sg_error *err)
 {
     if (samples < 1)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "direct light: %d samples per splat", samples);
     const sg_envmap *env = sg_world_envmap(w);
     const float inv_pi = 0.318309886183791f;
     int nt = threads > 0 ? threads : omp_get_max_threads();
-    uint64_t base = 0; /* global splat index: the random stream of a splat */
-    for (size_t m = 0; m < sg_world_model_count(w); ++m) {
-        const sg_scene *sc = sg_world_scene(w, (uint32_t)m);
-        const sg_pointset *ps = sg_scene_points(sc);
-        float *Em = E[m];
-#pragma omp parallel for schedule(dynamic, 256) num_threads(nt)
-        for (size_t i = 0; i < ps->count; ++i) {
-            sg_vec3 n = sg_pointset_normal(ps, i);
-            sg_world_hit h = {.hit = {.t = 0.0f, .p = sg_pointset_position(ps, i), .n = n, .splat = (uint32_t)i,
-                                      .leaf = UINT32_MAX},
-                              .model = (uint32_t)m};
-            uint64_t key = base + i;
-            double e[3] = {0, 0, 0};
-            for (int s = 0; s < samples; ++s) {
-                uint32_t d0 = (uint32_t)(4 * s);
-                /* Envmap sampling. */
-                float pl;
-                sg_vec3 wl = sg_envmap_sample(env, sg_rng_float(seed, key, 0, d0), sg_rng_float(seed, key, 0, d0 + 1), &pl);
-                float cl = sg_v3_dot(wl, n);
-                if (pl > 0.0f && cl > 0.0f) {
-                    sg_ray r = sg_world_spawn_ray(w, &h, wl, INFINITY);
-                    if (!sg_world_occluded(w, &r, NULL)) {
-                        sg_vec3 L = sg_envmap_eval(env, wl);
-                        float k = cl * power2(pl, cl * inv_pi) / pl;
-                        e[0] += L.x * k; e[1] += L.y * k; e[2] += L.z * k;
-                    }
-                }
-                /* Cosine sampling. */
-                sg_vec3 loc = sg_warp_cosine_hemisphere_sample(sg_rng_float(seed, key, 0, d0 + 2),
-                                                               sg_rng_float(seed, key, 0, d0 + 3));
-                float pc = sg_warp_cosine_hemisphere_pdf(loc);
-                if (pc > 0.0f) {
-                    sg_vec3 wc = sg_v3_normalize(to_world(n, loc));
-                    sg_ray r = sg_world_spawn_ray(w, &h, wc, INFINITY);
-                    if (!sg_world_occluded(w, &r, NULL)) {
-                        sg_vec3 L = sg_envmap_eval(env, wc);
-                        /* cos / pc = pi exactly; kept in the general form. */
-                        float k = loc.z * power2(pc, sg_envmap_pdf(env, wc)) / pc;
-                        e[0] += L.x * k; e[1] += L.y * k; e[2] += L.z * k;
-                    }
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, m));
+    if (!splats)
+        n = ps->count;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(nt)
+    for (size_t j = 0; j < n; ++j) {
+        size_t i = splats ? splats[j] : j;
+        sg_vec3 n_i = sg_pointset_normal(ps, i);
+        sg_world_hit h = {.hit = {.t = 0.0f, .p = sg_pointset_position(ps, i), .n = n_i, .splat = (uint32_t)i,
+                                  .leaf = UINT32_MAX},
+                          .model = m};
+        uint64_t key = key_base + i;
+        double e[3] = {0, 0, 0}, y2 = 0.0; /* y2: sum of squared per-sample luminances */
+        for (int s = 0; s < samples; ++s) {
+            double before = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+            uint32_t d0 = (uint32_t)(4 * s);
+            /* Envmap sampling. */
+            float pl;
+            sg_vec3 wl = sg_envmap_sample(env, sg_rng_float(seed, key, 0, d0), sg_rng_float(seed, key, 0, d0 + 1), &pl);
+            float cl = sg_v3_dot(wl, n_i);
+            if (pl > 0.0f && cl > 0.0f) {
+                sg_ray r = sg_world_spawn_ray(w, &h, wl, INFINITY);
+                if (!sg_world_occluded(w, &r, NULL)) {
+                    sg_vec3 L = sg_envmap_eval(env, wl);
+                    float k = cl * power2(pl, cl * inv_pi) / pl;
+                    e[0] += L.x * k; e[1] += L.y * k; e[2] += L.z * k;
                 }
             }
-            for (int c = 0; c < 3; ++c) {
-                double v = e[c] / samples;
-                if (isfinite(v) && v > 0.0)
-                    Em[3 * i + c] += (float)v;
+            /* Cosine sampling. */
+            sg_vec3 loc = sg_warp_cosine_hemisphere_sample(sg_rng_float(seed, key, 0, d0 + 2),
+                                                           sg_rng_float(seed, key, 0, d0 + 3));
+            float pc = sg_warp_cosine_hemisphere_pdf(loc);
+            if (pc > 0.0f) {
+                sg_vec3 wc = sg_v3_normalize(to_world(n_i, loc));
+                sg_ray r = sg_world_spawn_ray(w, &h, wc, INFINITY);
+                if (!sg_world_occluded(w, &r, NULL)) {
+                    sg_vec3 L = sg_envmap_eval(env, wc);
+                    /* cos / pc = pi exactly; kept in the general form. */
+                    float k = loc.z * power2(pc, sg_envmap_pdf(env, wc)) / pc;
+                    e[0] += L.x * k; e[1] += L.y * k; e[2] += L.z * k;
+                }
             }
+            double y = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2] - before;
+            y2 += y * y;
         }
-        base += ps->count;
+        if (sigma) {
+            double mean = (0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2]) / samples;
+            double var = samples > 1 ? (y2 / samples - mean * mean) * samples / (samples - 1) : mean * mean;
+            double se = sqrt(var > 0.0 ? var / samples : 0.0);
+            sigma[j] = isfinite(se) ? (float)se : 0.0f;
+        }
+        for (int c = 0; c < 3; ++c) {
+            double v = e[c] / samples;
+            out[3 * j + c] = isfinite(v) && v > 0.0 ? (float)v : 0.0f;
+        }
     }
     return SG_OK;
 }

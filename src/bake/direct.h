@@ -12,6 +12,7 @@
  * (sg_world_spawn_ray from the splat, so the splat's own surface does not
  * shadow it). Unbiased for E = int L V cos dw over the hemisphere.
  * Random numbers: sg_rng_float(seed, splat index over all models, 0, dim):
+ * the same for a splat whether it is computed alone or with all others;
  * the result ignores the thread count.
  */
 #ifndef SG_BAKE_DIRECT_H
@@ -22,9 +23,17 @@
 #include "core/error.h"
 #include "render/world.h"
 
-/* Adds the direct irradiance (RGB per splat) to E[m] for every model m
- * (E as sg_irradiance_gather makes it). samples >= 1. */
-sg_status sg_direct_irradiance_add(const sg_world *w, int samples, uint64_t seed, int threads, float **E,
-                                   sg_error *err);
+/* The direct irradiance at n splats of model m: out[3 j .. 3 j + 2] (RGB)
+ * for splat splats[j] (splats NULL: every splat, j = splat index; n is
+ * then ignored). The random stream of splat i is keyed by key_base + i,
+ * key_base = the number of splats of models before m, so a splat's value
+ * does not depend on which other splats are computed. samples >= 1.
+ * sigma (NULL: not wanted): per listed splat, the standard error of the
+ * estimate's luminance (0.2126 R + 0.7152 G + 0.0722 B), from the spread
+ * of the per-sample terms: what the refinement of the sample points
+ * (samples.h) tells apart from a real change of the light. */
+sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t *splats, size_t n,
+                                  uint64_t key_base, int samples, uint64_t seed, int threads, float *out,
+                                  float *sigma, sg_error *err);
 
 #endif

@@ -8,7 +8,9 @@
  *     equals the one-pass records bit for bit (also across thread counts),
  *     and the two bake files are the same bytes;
  *  4. the progress callback is called, counts up to the total, and a
- *     nonzero return cancels with the completed prefix kept. */
+ *     nonzero return cancels with the completed prefix kept;
+ *  5. glossy bakes: bins, sample points and the new parameters round trip;
+ *     damaged glossy sections and the old META layout are named. */
 #include "test_support.h"
 
 #include <math.h>
@@ -195,8 +197,8 @@ static void test_bake_io_param_hash(void **state)
                           .gather = {.k = 64, .normal_cos = 0.7f, .threads = 5}};
     assert_int_equal(sg_bake_param_hash(&zero), sg_bake_param_hash(&spelt));
     assert_int_equal(sg_bake_param_hash(NULL), sg_bake_param_hash(&spelt));
-    sg_bake_desc v[6];
-    for (int i = 0; i < 6; ++i)
+    sg_bake_desc v[9];
+    for (int i = 0; i < 9; ++i)
         v[i] = spelt;
     v[0].photons.count = 1000001;
     v[1].photons.seed = 2;
@@ -204,7 +206,17 @@ static void test_bake_io_param_hash(void **state)
     v[3].photons.rr_depth = 3;
     v[4].gather.k = 65;
     v[5].gather.normal_cos = 0.71f;
-    for (int i = 0; i < 6; ++i)
+    v[6].sample_spacing = 3.0f;
+    v[7].glossy_res = 12;
+    v[8].glossy_rays = 64;
+    /* 0 means "from the material" and < 0 "every splat": both differ from
+     * an explicit spacing; glossy rays 128 is the default spelt out. */
+    sg_bake_desc every = spelt, rays = spelt;
+    every.sample_spacing = -5.0f;
+    rays.glossy_rays = 128;
+    assert_int_equal(sg_bake_param_hash(&rays), sg_bake_param_hash(&spelt));
+    assert_true(sg_bake_param_hash(&every) != sg_bake_param_hash(&spelt));
+    for (int i = 0; i < 9; ++i)
         if (sg_bake_param_hash(&v[i]) == sg_bake_param_hash(&spelt))
             fail_msg("changing parameter %d leaves the hash", i);
 }
@@ -324,6 +336,134 @@ static void test_bake_io_bad_values(void **state)
     /* META that contradicts the header's parameter hash */
     rewrite(path, bad, "META", 2 * 2, 1.0f, 0); /* low half of the seed */
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section META hashes to");
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* A GGX sphere over a ground: the glossy sections are written. */
+static sg_world *glossy_world(void)
+{
+    return world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,\"transform\":{\"translate\":"
+                           "[0,1,0]},\"material\":{\"type\":\"ggx\",\"roughness\":0.3,\"specular\":0.3}},"
+                           "{\"builtin\":\"ground\",\"points\":3000}],\"envmap\":{\"builtin\":\"sunsky\"}}");
+}
+
+static sg_bake *make_glossy_bake(const sg_world *w)
+{
+    sg_bake_desc d = bake_desc(8192);
+    d.sample_spacing = 3.0f;
+    d.glossy_res = 8;
+    d.glossy_rays = 48;
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    return b;
+}
+
+/* 1. Glossy bake: sample counts, bins, sample splats and per-splat sample
+ * indices, the new parameters, and the frame survive save and load. */
+static void test_bake_io_glossy_roundtrip(void **state)
+{
+    (void)state;
+    sg_world *w = glossy_world();
+    sg_bake *b = make_glossy_bake(w);
+    const char *path = tmp_path("glossy.sgbake");
+    sg_error err = {0};
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
+    sg_bake *c = NULL;
+    if (sg_bake_load(path, w, SCENE_HASH, &c, &err) != SG_OK)
+        fail_msg("load: %s", err.message);
+    for (uint32_t m = 0; m < 2; ++m) {
+        assert_int_equal(sg_bake_sample_count(b, m), sg_bake_sample_count(c, m));
+        assert_true(sg_bake_sample_count(b, m) > 0);
+        int rb, rc;
+        size_t nb = 0, nc = 0, splats;
+        const uint32_t *sb, *sc, *qb, *qc;
+        const uint16_t *gb, *gc;
+        sg_bake_irradiance_data(b, m, &splats);
+        sg_bake_glossy_data(b, m, &rb, &nb, &sb, &qb, &gb);
+        sg_bake_glossy_data(c, m, &rc, &nc, &sc, &qc, &gc);
+        assert_int_equal(rb, rc);
+        assert_int_equal(rb, m == 0 ? 8 : 0);
+        if (!rb)
+            continue;
+        assert_int_equal(nb, nc);
+        assert_memory_equal(sb, sc, nb * sizeof *sb);
+        assert_memory_equal(qb, qc, splats * sizeof *qb);
+        assert_memory_equal(gb, gc, nb * 3 * 64 * sizeof *gb);
+    }
+    sg_bake_stats sb, sc;
+    sg_bake_get_stats(b, &sb);
+    sg_bake_get_stats(c, &sc);
+    assert_int_equal(sb.sample_points, sc.sample_points);
+    assert_int_equal(sb.glossy_points, sc.glossy_points);
+    assert_int_equal(sb.memory_bytes, sc.memory_bytes);
+    assert_int_equal(sb.glossy_bytes, sb.glossy_points * 3 * 64 * 2);
+    sg_bake_desc dc = sg_bake_get_desc(c);
+    assert_true(dc.sample_spacing == 3.0f);
+    assert_int_equal(dc.glossy_res, 8);
+    assert_int_equal(dc.glossy_rays, 48);
+    sg_image ib, ic;
+    render(b, w, &ib);
+    render(c, w, &ic);
+    assert_memory_equal(ib.data, ic.data, sizeof(float) * 3 * 24 * 24);
+    const char *again = tmp_path("glossy2.sgbake");
+    assert_int_equal(sg_bake_save(c, again, SCENE_HASH, &err), SG_OK);
+    size_t n1, n2;
+    unsigned char *f1 = read_all(path, &n1), *f2 = read_all(again, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(f1, f2, n1);
+    free(f1);
+    free(f2);
+    sg_image_free(&ib);
+    sg_image_free(&ic);
+    sg_bake_destroy(b);
+    sg_bake_destroy(c);
+    sg_world_destroy(w);
+}
+
+static float float_of_bits(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* 2. A damaged glossy section is named: a flipped byte (checksum), a
+ * non-finite bin, a splat pointing past the sample points; a file of
+ * META layout 2 (before sample points) is refused with a message. */
+static void test_bake_io_glossy_corrupt(void **state)
+{
+    (void)state;
+    sg_world *w = glossy_world();
+    sg_bake *b = make_glossy_bake(w);
+    const char *path = tmp_path("gbad.sgbake"), *bad = tmp_path("gbad2.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
+    sg_bake_file *f = NULL;
+    assert_int_equal(sg_bake_file_open(path, 0, 0, &f, NULL), SG_OK);
+    const sg_bake_section *gs = sg_bake_file_find(f, "G000");
+    assert_non_null(gs);
+    uint64_t off = gs->offset + gs->size / 2;
+    sg_bake_file_close(f);
+    size_t n;
+    unsigned char *bytes = read_all(path, &n);
+    bytes[off] ^= 0x10;
+    write_all(bad, bytes, n);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section G000: checksum mismatch");
+    free(bytes);
+    char msg[300];
+    rewrite(path, bad, "G000", 0, float_of_bits(0x7fc00000u), 0); /* halves 0x0000, 0x7fc0 */
+    snprintf(msg, sizeof msg, "%s: section G000: sample point 0, bin 0: value is not finite", bad);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, msg);
+    rewrite(path, bad, "N000", 17, float_of_bits(0xffffffffu), 0);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section N000: splat 17 names sample point 4294967295");
+    rewrite(path, bad, "P000", 0, float_of_bits(3000000u), 0);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section P000: sample point 0 names splat 3000000");
+    rewrite(path, bad, "META", 0, float_of_bits(2u), 0);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_UNSUPPORTED,
+                      "section META: layout 2, this build reads 3 (made before sample points and glossy bins; bake "
+                      "again)");
     sg_bake_destroy(b);
     sg_world_destroy(w);
 }
@@ -531,6 +671,8 @@ int main(void)
         cmocka_unit_test(test_bake_io_truncated_or_corrupt),
         cmocka_unit_test(test_bake_io_splat_count_mismatch),
         cmocka_unit_test(test_bake_io_bad_values),
+        cmocka_unit_test(test_bake_io_glossy_roundtrip),
+        cmocka_unit_test(test_bake_io_glossy_corrupt),
         cmocka_unit_test(test_bake_io_resume_equals_one_pass),
         cmocka_unit_test(test_bake_io_checkpoint_checks),
         cmocka_unit_test(test_photons_progress_and_cancel),

@@ -1,0 +1,454 @@
+/* samples.c — sample points: greedy thinning, refinement, interpolation
+ * (see samples.h).
+ *
+ * Invariants:
+ *  1. no two samples facing the same way (normal dot >= normal_cos) lie
+ *     closer than the spacing of the finer of the two;
+ *  2. every splat that was a candidate of a thinning at spacing s has a
+ *     same-facing sample within s (it was accepted, or rejected because of
+ *     one);
+ *  3. the set, the interpolated values and the nearest indices depend on
+ *     the inputs only: decisions run sequentially in a fixed order, and the
+ *     parallel loops give each splat a sum in the grid's fixed item order.
+ *
+ * The grid is a hash of integer cell coordinates (open addressing, linear
+ * probing) to a singly linked list of items; its cell size equals the
+ * largest query radius, so a query reads the 27 cells around a point.
+ */
+#include "bake/samples.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/alloc.h"
+
+static const uint32_t NONE = UINT32_MAX;
+
+typedef struct grid {
+    float inv;           /* 1 / cell size                                */
+    size_t mask;         /* slots - 1 (slots a power of two)             */
+    int32_t *key;        /* 3 cell coordinates per slot                  */
+    uint32_t *head;      /* first item of the slot's cell; NONE: empty   */
+    uint32_t *next;      /* per item: next item of its cell; NONE: last  */
+} grid;
+
+static void grid_free(grid *g)
+{
+    sg_free(g->key);
+    sg_free(g->head);
+    sg_free(g->next);
+    memset(g, 0, sizeof *g);
+}
+
+static int grid_init(grid *g, float cell, size_t max_items)
+{
+    memset(g, 0, sizeof *g);
+    size_t slots = 64;
+    while (slots < 2 * max_items + 16)
+        slots *= 2;
+    g->inv = 1.0f / cell;
+    g->mask = slots - 1;
+    g->key = sg_alloc_array(slots, 3 * sizeof(int32_t));
+    g->head = sg_alloc_array(slots, sizeof(uint32_t));
+    g->next = sg_alloc_array(max_items ? max_items : 1, sizeof(uint32_t));
+    if (!g->key || !g->head || !g->next) {
+        grid_free(g);
+        return 0;
+    }
+    for (size_t i = 0; i < slots; ++i)
+        g->head[i] = NONE;
+    return 1;
+}
+
+static int32_t cell_coord(float x, float inv)
+{
+    float c = floorf(x * inv);
+    /* Clamped so that far-away or non-finite input cannot overflow. */
+    if (!(c > -1e9f)) c = -1e9f;
+    if (c > 1e9f) c = 1e9f;
+    return (int32_t)c;
+}
+
+static size_t slot_of(const grid *g, int32_t x, int32_t y, int32_t z)
+{
+    uint64_t h = (uint64_t)(uint32_t)x * 0x9E3779B97F4A7C15ull ^ (uint64_t)(uint32_t)y * 0xC2B2AE3D27D4EB4Full ^
+                 (uint64_t)(uint32_t)z * 0x165667B19E3779F9ull;
+    h ^= h >> 29;
+    size_t s = (size_t)h & g->mask;
+    while (g->head[s] != NONE && !(g->key[3 * s] == x && g->key[3 * s + 1] == y && g->key[3 * s + 2] == z))
+        s = (s + 1) & g->mask;
+    return s;
+}
+
+static void grid_insert(grid *g, uint32_t item, sg_vec3 p)
+{
+    int32_t x = cell_coord(p.x, g->inv), y = cell_coord(p.y, g->inv), z = cell_coord(p.z, g->inv);
+    size_t s = slot_of(g, x, y, z);
+    if (g->head[s] == NONE) {
+        g->key[3 * s] = x;
+        g->key[3 * s + 1] = y;
+        g->key[3 * s + 2] = z;
+    }
+    g->next[item] = g->head[s];
+    g->head[s] = item;
+}
+
+/* The 27 cells around p: heads[] gets each cell's first item (NONE when
+ * empty), in a fixed order. */
+static void grid_around(const grid *g, sg_vec3 p, uint32_t heads[27])
+{
+    int32_t x = cell_coord(p.x, g->inv), y = cell_coord(p.y, g->inv), z = cell_coord(p.z, g->inv);
+    int k = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                heads[k++] = g->head[slot_of(g, x + dx, y + dy, z + dz)];
+}
+
+static float dist2(sg_vec3 a, sg_vec3 b)
+{
+    sg_vec3 d = sg_v3_sub(a, b);
+    return sg_v3_dot(d, d);
+}
+
+static float luminance(const float *v) { return 0.2126f * v[0] + 0.7152f * v[1] + 0.0722f * v[2]; }
+
+void sg_sample_set_free(sg_sample_set *set)
+{
+    if (!set)
+        return;
+    sg_free(set->splat);
+    sg_free(set->level);
+    memset(set, 0, sizeof *set);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+sg_status sg_samples_median_radius(const sg_pointset *ps, float *out, sg_error *err)
+{
+    if (ps->count == 0) {
+        *out = 0.0f;
+        return SG_OK;
+    }
+    float *r = sg_alloc_array(ps->count, sizeof *r);
+    if (!r)
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for %zu radii", ps->count);
+    memcpy(r, ps->radius, ps->count * sizeof *r);
+    qsort(r, ps->count, sizeof *r, cmp_float);
+    *out = r[ps->count / 2];
+    sg_free(r);
+    return SG_OK;
+}
+
+float sg_samples_default_spacing(const sg_material *m)
+{
+    if (m->type != SG_MATERIAL_GGX || !(m->specular > 0.0f))
+        return 4.0f;
+    float r = m->roughness < 0.0f ? 0.0f : (m->roughness > 1.0f ? 1.0f : m->roughness);
+    return 2.0f + 2.0f * r;
+}
+
+static int set_reserve(sg_sample_set *set, size_t n)
+{
+    if (n <= set->capacity)
+        return 1;
+    size_t cap = set->capacity ? set->capacity : 1024;
+    while (cap < n)
+        cap *= 2;
+    void *s = set->splat, *l = set->level;
+    int ok = sg_realloc_array(&s, set->capacity, cap, sizeof *set->splat);
+    set->splat = s;
+    ok = ok && sg_realloc_array(&l, set->capacity, cap, sizeof *set->level);
+    set->level = l;
+    if (!ok)
+        return 0;
+    set->capacity = cap;
+    return 1;
+}
+
+sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos, const uint32_t *candidates,
+                          size_t ncand, uint8_t level, sg_sample_set *set, sg_error *err)
+{
+    if (!(spacing > 0.0f) || !isfinite(spacing))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "samples: spacing %g is not positive and finite",
+                            (double)spacing);
+    if (!candidates)
+        ncand = ps->count;
+    grid g;
+    if (!grid_init(&g, spacing, set->count + ncand) || !set_reserve(set, set->count + ncand)) {
+        grid_free(&g);
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for %zu candidates", ncand);
+    }
+    for (size_t j = 0; j < set->count; ++j)
+        grid_insert(&g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+    float s2 = spacing * spacing;
+    for (size_t c = 0; c < ncand; ++c) {
+        uint32_t i = candidates ? candidates[c] : (uint32_t)c;
+        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+        uint32_t heads[27];
+        grid_around(&g, p, heads);
+        int near = 0;
+        for (int k = 0; k < 27 && !near; ++k)
+            for (uint32_t j = heads[k]; j != NONE && !near; j = g.next[j]) {
+                uint32_t sj = set->splat[j];
+                near = dist2(p, sg_pointset_position(ps, sj)) < s2 &&
+                       sg_v3_dot(n, sg_pointset_normal(ps, sj)) >= normal_cos;
+            }
+        if (near)
+            continue;
+        size_t id = set->count++;
+        set->splat[id] = i;
+        set->level[id] = level;
+        grid_insert(&g, (uint32_t)id, p);
+    }
+    grid_free(&g);
+    return SG_OK;
+}
+
+static float level_spacing(float s0, uint8_t level) { return ldexpf(s0, -(int)level); }
+
+sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                            const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
+                            sg_error *err)
+{
+    *added = 0;
+    if (level >= SG_SAMPLES_MAX_LEVEL || set->count == 0)
+        return SG_OK;
+    double mean = 0.0;
+    for (size_t j = 0; j < set->count; ++j)
+        mean += luminance(values + 3 * j);
+    mean /= (double)set->count;
+    if (!(mean > 0.0))
+        return SG_OK;
+    float floor_y = (float)(0.05 * mean), sl = level_spacing(s0, level), r2 = 4.0f * sl * sl;
+    grid g = {0}, gm = {0};
+    uint32_t *marked = NULL, *cands = NULL;
+    size_t nmarked = 0, ncand = 0;
+    sg_status st = SG_OK;
+    if (!grid_init(&g, 2.0f * sl, set->count) || !(marked = sg_alloc_array(set->count, sizeof *marked))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
+        goto done;
+    }
+    for (size_t j = 0; j < set->count; ++j)
+        grid_insert(&g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+    for (size_t j = 0; j < set->count; ++j) {
+        if (set->level[j] != level)
+            continue;
+        sg_vec3 p = sg_pointset_position(ps, set->splat[j]), n = sg_pointset_normal(ps, set->splat[j]);
+        float yj = fmaxf(luminance(values + 3 * j), floor_y);
+        uint32_t heads[27];
+        grid_around(&g, p, heads);
+        int differs = 0;
+        for (int k = 0; k < 27 && !differs; ++k)
+            for (uint32_t i = heads[k]; i != NONE && !differs; i = g.next[i]) {
+                uint32_t si = set->splat[i];
+                if (i == j || dist2(p, sg_pointset_position(ps, si)) > r2 ||
+                    sg_v3_dot(n, sg_pointset_normal(ps, si)) < normal_cos)
+                    continue;
+                float yi = fmaxf(luminance(values + 3 * (size_t)i), floor_y), dy = fabsf(yi - yj);
+                differs = dy > threshold * fmaxf(yi, yj) &&
+                          (!sigma || dy > 3.0f * sqrtf(sigma[i] * sigma[i] + sigma[j] * sigma[j]));
+            }
+        if (differs)
+            marked[nmarked++] = (uint32_t)j;
+    }
+    if (nmarked == 0)
+        goto done;
+    if (!grid_init(&gm, sl, nmarked) || !(cands = sg_alloc_array(ps->count, sizeof *cands))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
+        goto done;
+    }
+    for (size_t k = 0; k < nmarked; ++k)
+        grid_insert(&gm, (uint32_t)k, sg_pointset_position(ps, set->splat[marked[k]]));
+    float sl2 = sl * sl;
+    for (size_t i = 0; i < ps->count; ++i) {
+        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+        uint32_t heads[27];
+        grid_around(&gm, p, heads);
+        int near = 0;
+        for (int k = 0; k < 27 && !near; ++k)
+            for (uint32_t m = heads[k]; m != NONE && !near; m = gm.next[m]) {
+                uint32_t sm = set->splat[marked[m]];
+                near = dist2(p, sg_pointset_position(ps, sm)) <= sl2 &&
+                       sg_v3_dot(n, sg_pointset_normal(ps, sm)) >= normal_cos;
+            }
+        if (near)
+            cands[ncand++] = (uint32_t)i;
+    }
+    size_t before = set->count;
+    st = sg_samples_thin(ps, 0.5f * sl, normal_cos, cands, ncand, (uint8_t)(level + 1), set, err);
+    if (st == SG_OK)
+        *added = set->count - before;
+done:
+    grid_free(&g);
+    grid_free(&gm);
+    sg_free(marked);
+    sg_free(cands);
+    return st;
+}
+
+/* Wendland C2 on [0,1]: smooth, compactly supported, positive. */
+static float wendland(float q)
+{
+    float a = 1.0f - q;
+    return a * a * a * a * (4.0f * q + 1.0f);
+}
+
+static int grid_of_samples(grid *g, const sg_pointset *ps, const sg_sample_set *set, float cell)
+{
+    if (!grid_init(g, cell, set->count))
+        return 0;
+    for (size_t j = 0; j < set->count; ++j)
+        grid_insert(g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+    return 1;
+}
+
+/* Nearest sample to splat i among the 27 cells: same-facing preferred.
+ * NONE when the cells hold no sample. */
+static uint32_t nearest_in_cells(const grid *g, const sg_pointset *ps, const sg_sample_set *set, size_t i,
+                                 float normal_cos)
+{
+    sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+    uint32_t heads[27], best_f = NONE, best_a = NONE;
+    float d_f = INFINITY, d_a = INFINITY;
+    grid_around(g, p, heads);
+    for (int k = 0; k < 27; ++k)
+        for (uint32_t j = heads[k]; j != NONE; j = g->next[j]) {
+            uint32_t sj = set->splat[j];
+            float d = dist2(p, sg_pointset_position(ps, sj));
+            /* ties: the lower sample index, whatever the cell order */
+            if (d < d_a || (d == d_a && j < best_a)) {
+                d_a = d;
+                best_a = j;
+            }
+            if (sg_v3_dot(n, sg_pointset_normal(ps, sj)) >= normal_cos && (d < d_f || (d == d_f && j < best_f))) {
+                d_f = d;
+                best_f = j;
+            }
+        }
+    return best_f != NONE ? best_f : best_a;
+}
+
+/* Linear scan: the nearest sample of all (a splat far from every
+ * sample, which thinning over all splats never leaves). */
+static uint32_t nearest_anywhere(const sg_pointset *ps, const sg_sample_set *set, size_t i)
+{
+    sg_vec3 p = sg_pointset_position(ps, i);
+    uint32_t best = 0;
+    float bd = INFINITY;
+    for (size_t j = 0; j < set->count; ++j) {
+        float d = dist2(p, sg_pointset_position(ps, set->splat[j]));
+        if (d < bd) {
+            bd = d;
+            best = (uint32_t)j;
+        }
+    }
+    return best;
+}
+
+sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+                                 float normal_cos, const float *values, int threads, float *out, sg_error *err)
+{
+    if (set->count == 0) {
+        memset(out, 0, 3 * ps->count * sizeof *out);
+        return SG_OK;
+    }
+    grid g;
+    if (!grid_of_samples(&g, ps, set, support * s0))
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the interpolation grid");
+    int nt = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
+    for (size_t i = 0; i < ps->count; ++i) {
+        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i), t, bt;
+        sg_v3_basis(n, &t, &bt);
+        uint32_t heads[27];
+        grid_around(&g, p, heads);
+        /* Weighted least squares of f = c0 + c1 u + c2 v in the splat's
+         * tangent plane (u, v in units of the level-0 support), c0 the
+         * value: exact for light that varies linearly over the surface,
+         * and on a curved surface the normal (what the light depends on)
+         * does, to first order. A weighted mean would pull every value
+         * towards its neighbourhood's average (1.5% of the energy on a
+         * unit sphere at the default spacing, measured). */
+        double m[6] = {0, 0, 0, 0, 0, 0}; /* sums of w, wu, wv, wuu, wuv, wvv */
+        double rhs[3][3] = {{0}};         /* per channel: sums of wf, wfu, wfv */
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        float inv_r0 = 1.0f / (support * s0);
+        for (int k = 0; k < 27; ++k)
+            for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
+                uint32_t sj = set->splat[j];
+                float r = support * level_spacing(s0, set->level[j]);
+                sg_vec3 dp = sg_v3_sub(sg_pointset_position(ps, sj), p);
+                float d2 = sg_v3_dot(dp, dp);
+                if (d2 >= r * r || sg_v3_dot(n, sg_pointset_normal(ps, sj)) < normal_cos)
+                    continue;
+                /* Finer samples count 4^level more: they were added where
+                 * the light changes faster than the coarse ones resolve. */
+                double w = (double)wendland(sqrtf(d2) / r) * (double)(1u << (2 * set->level[j]));
+                double u = sg_v3_dot(dp, t) * inv_r0, v = sg_v3_dot(dp, bt) * inv_r0;
+                m[0] += w;
+                m[1] += w * u;
+                m[2] += w * v;
+                m[3] += w * u * u;
+                m[4] += w * u * v;
+                m[5] += w * v * v;
+                for (int c = 0; c < 3; ++c) {
+                    float f = values[3 * (size_t)j + (size_t)c];
+                    rhs[c][0] += w * f;
+                    rhs[c][1] += w * f * u;
+                    rhs[c][2] += w * f * v;
+                    lo[c] = fminf(lo[c], f);
+                    hi[c] = fmaxf(hi[c], f);
+                }
+            }
+        if (m[0] > 0.0) {
+            /* c0 by Cramer's rule; the weighted mean where the points do
+             * not span the plane (a line of samples, one sample, a rim). */
+            double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
+            double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
+            int fit = det > 1e-4 * a * a * a;
+            for (int c = 0; c < 3; ++c) {
+                double v0 = rhs[c][0] / a;
+                if (fit) {
+                    double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
+                    v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
+                }
+                /* no new extrema: a fit across a shadow edge cannot
+                 * overshoot the values it was made from */
+                float vf = (float)v0;
+                out[3 * i + (size_t)c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
+            }
+        } else {
+            uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
+            if (j == NONE)
+                j = nearest_anywhere(ps, set, i);
+            memcpy(out + 3 * i, values + 3 * (size_t)j, 3 * sizeof *out);
+        }
+    }
+    grid_free(&g);
+    return SG_OK;
+}
+
+sg_status sg_samples_nearest(const sg_pointset *ps, const sg_sample_set *set, float s0, float normal_cos,
+                             int threads, uint32_t *out, sg_error *err)
+{
+    if (set->count == 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "samples: no sample points");
+    grid g;
+    if (!grid_of_samples(&g, ps, set, 2.0f * s0))
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the nearest-sample grid");
+    int nt = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
+    for (size_t i = 0; i < ps->count; ++i) {
+        uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
+        out[i] = j != NONE ? j : nearest_anywhere(ps, set, i);
+    }
+    grid_free(&g);
+    return SG_OK;
+}

@@ -1,0 +1,241 @@
+/* test_samples.c — the bake's sample points (bake/samples.h):
+ *  1. thinning: deterministic, no two same-facing samples closer than the
+ *     spacing, every splat within the spacing of a same-facing sample, far
+ *     fewer samples than splats;
+ *  2. refinement: a step in the values adds samples along the step only,
+ *     at half the spacing and respecting it; constant values, or a step
+ *     within the values' noise, add none;
+ *  3. interpolation reproduces a constant exactly (weights normalised), a
+ *     linear function of position too (the tangent-plane fit), and a step
+ *     stays a step away from it (no blur beyond the support);
+ *  4. nearest: each splat's sample is its nearest same-facing one.
+ * The models are the builtin sphere and ground (render/world.h). */
+#include "test_support.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/samples.h"
+#include "core/alloc.h"
+#include "render/world.h"
+
+static sg_world *world_from_json(const char *json)
+{
+    sg_scene_file sf;
+    sg_error err = {0};
+    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
+        fail_msg("scene: %s", err.message);
+    sg_world *w = NULL;
+    if (sg_world_create(&sf, &w, &err) != SG_OK)
+        fail_msg("world: %s", err.message);
+    sg_scene_file_free(&sf);
+    return w;
+}
+
+static const float COS = 0.7f;
+
+static float d2(const sg_pointset *ps, size_t a, size_t b)
+{
+    sg_vec3 d = sg_v3_sub(sg_pointset_position(ps, a), sg_pointset_position(ps, b));
+    return sg_v3_dot(d, d);
+}
+
+static int same_facing(const sg_pointset *ps, size_t a, size_t b)
+{
+    return sg_v3_dot(sg_pointset_normal(ps, a), sg_pointset_normal(ps, b)) >= COS;
+}
+
+/* Invariants 1 and 2 of samples.c by brute force over all pairs. */
+static void check_spacing_and_coverage(const sg_pointset *ps, const sg_sample_set *set, float s)
+{
+    for (size_t a = 0; a < set->count; ++a)
+        for (size_t b = a + 1; b < set->count; ++b)
+            if (same_facing(ps, set->splat[a], set->splat[b]) && d2(ps, set->splat[a], set->splat[b]) < s * s)
+                fail_msg("samples %zu and %zu (splats %u, %u) are %g apart, spacing %g", a, b, set->splat[a],
+                         set->splat[b], sqrt(d2(ps, set->splat[a], set->splat[b])), s);
+    for (size_t i = 0; i < ps->count; ++i) {
+        int covered = 0;
+        for (size_t a = 0; a < set->count && !covered; ++a)
+            covered = same_facing(ps, i, set->splat[a]) && d2(ps, i, set->splat[a]) <= s * s;
+        if (!covered)
+            fail_msg("splat %zu has no same-facing sample within %g", i, s);
+    }
+}
+
+static void test_samples_thin_spacing_coverage_determinism(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":12000}]}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    float med;
+    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
+    assert_true(med > 0.0f);
+    float s = 4.0f * med;
+    sg_sample_set a = {0}, b = {0};
+    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &a, NULL), SG_OK);
+    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &b, NULL), SG_OK);
+    assert_int_equal(a.count, b.count);
+    assert_memory_equal(a.splat, b.splat, a.count * sizeof *a.splat);
+    /* A disk of radius s holds about (s / spacing)^2 pi / (pi/4..1) splats
+     * of a Poisson-disk set: expect well under a tenth of the splats. */
+    fprintf(stderr, "thinning: %zu of %zu splats at spacing %g (median radius %g)\n", a.count, ps->count, s, med);
+    assert_true(a.count > 50 && a.count * 5 < ps->count);
+    check_spacing_and_coverage(ps, &a, s);
+    sg_sample_set_free(&a);
+    sg_sample_set_free(&b);
+    sg_world_destroy(w);
+}
+
+/* A step in x on the ground: refinement adds samples only near the step,
+ * at half the spacing; constant values add none. */
+static void test_samples_refine_follows_a_step(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    float med;
+    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
+    float s = 4.0f * med;
+    sg_sample_set set = {0};
+    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
+    size_t n0 = set.count;
+    float *v = sg_alloc_array(3 * ps->count, sizeof *v);
+    assert_non_null(v);
+    for (size_t j = 0; j < 3 * n0; ++j)
+        v[j] = 2.0f;
+    size_t added = 1;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(added, 0);
+    for (size_t j = 0; j < n0; ++j)
+        for (int c = 0; c < 3; ++c)
+            v[3 * j + c] = ps->px[set.splat[j]] > 0.0f ? 2.0f : 0.2f;
+    /* The same step within its noise (standard error 1 on a difference
+     * of 1.8): not significant, not refined. */
+    float *sig = sg_alloc_array(n0, sizeof *sig);
+    assert_non_null(sig);
+    for (size_t j = 0; j < n0; ++j)
+        sig[j] = 1.0f;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(added, 0);
+    for (size_t j = 0; j < n0; ++j)
+        sig[j] = 0.1f;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
+    fprintf(stderr, "refinement: %zu samples, %zu added along the step\n", n0, added);
+    assert_true(added > 0);
+    assert_int_equal(set.count, n0 + added);
+    for (size_t j = n0; j < set.count; ++j) {
+        assert_int_equal(set.level[j], 1);
+        /* marked samples lie within 2 s of the step, candidates within s of them */
+        if (!(fabsf(ps->px[set.splat[j]]) <= 3.0f * s))
+            fail_msg("refined sample %zu at x = %g, farther than 3 s = %g from the step", j,
+                     ps->px[set.splat[j]], 3.0f * s);
+        for (size_t k = 0; k < j; ++k)
+            if (d2(ps, set.splat[j], set.splat[k]) < 0.25f * s * s)
+                fail_msg("refined sample %zu is %g from sample %zu, under s/2 = %g", j,
+                         sqrt(d2(ps, set.splat[j], set.splat[k])), k, 0.5 * s);
+    }
+    sg_free(v);
+    sg_free(sig);
+    sg_sample_set_free(&set);
+    sg_world_destroy(w);
+}
+
+/* Normalised weights: a constant comes back exactly (to float rounding);
+ * a step is kept sharp beyond one support radius (2 s) of it. */
+static void test_samples_interpolate(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    float med;
+    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
+    float s = 4.0f * med;
+    sg_sample_set set = {0};
+    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
+    float *v = sg_alloc_array(3 * set.count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
+    assert_non_null(v);
+    assert_non_null(out);
+    for (size_t j = 0; j < set.count; ++j) {
+        v[3 * j] = 1.5f;
+        v[3 * j + 1] = 0.25f;
+        v[3 * j + 2] = 3.0f;
+    }
+    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    for (size_t i = 0; i < ps->count; ++i)
+        if (fabsf(out[3 * i] - 1.5f) > 1e-5f || fabsf(out[3 * i + 1] - 0.25f) > 1e-5f ||
+            fabsf(out[3 * i + 2] - 3.0f) > 1e-5f)
+            fail_msg("splat %zu: (%g, %g, %g), expected (1.5, 0.25, 3)", i, out[3 * i], out[3 * i + 1],
+                     out[3 * i + 2]);
+    /* A linear function of position, away from the rim (where the fit
+     * would extrapolate and is clamped): reproduced to float rounding. */
+    for (size_t j = 0; j < set.count; ++j) {
+        float x = ps->px[set.splat[j]], z = ps->pz[set.splat[j]];
+        v[3 * j] = 2.0f + 0.05f * x;
+        v[3 * j + 1] = 2.0f - 0.03f * z;
+        v[3 * j + 2] = 2.0f + 0.02f * (x + z);
+    }
+    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    for (size_t i = 0; i < ps->count; ++i) {
+        float x = ps->px[i], z = ps->pz[i];
+        if (fabsf(x) > 15.0f - 3.0f * s || fabsf(z) > 15.0f - 3.0f * s)
+            continue;
+        float want[3] = {2.0f + 0.05f * x, 2.0f - 0.03f * z, 2.0f + 0.02f * (x + z)};
+        for (int c = 0; c < 3; ++c)
+            if (!(fabsf(out[3 * i + (size_t)c] - want[c]) <= 1e-4f))
+                fail_msg("splat %zu at (%g, %g), channel %d: %.6f, the linear field is %.6f", i, x, z, c,
+                         out[3 * i + (size_t)c], want[c]);
+    }
+    for (size_t j = 0; j < set.count; ++j)
+        v[3 * j] = v[3 * j + 1] = v[3 * j + 2] = ps->px[set.splat[j]] > 0.0f ? 1.0f : 0.0f;
+    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 1, out, NULL), SG_OK);
+    for (size_t i = 0; i < ps->count; ++i) {
+        float x = ps->px[i];
+        if (fabsf(x) > 2.0f * s && out[3 * i] != (x > 0.0f ? 1.0f : 0.0f))
+            fail_msg("splat %zu at x = %g: %g, the step blurred past 2 s = %g", i, x, out[3 * i], 2.0f * s);
+    }
+    sg_free(v);
+    sg_free(out);
+    sg_sample_set_free(&set);
+    sg_world_destroy(w);
+}
+
+static void test_samples_nearest(void **state)
+{
+    (void)state;
+    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}]}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    float med;
+    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
+    float s = 3.0f * med;
+    sg_sample_set set = {0};
+    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
+    uint32_t *near = sg_alloc_array(ps->count, sizeof *near);
+    assert_non_null(near);
+    assert_int_equal(sg_samples_nearest(ps, &set, s, COS, 2, near, NULL), SG_OK);
+    for (size_t i = 0; i < ps->count; ++i) {
+        assert_true(near[i] < set.count);
+        float best = INFINITY;
+        for (size_t j = 0; j < set.count; ++j)
+            if (same_facing(ps, i, set.splat[j]) && d2(ps, i, set.splat[j]) < best)
+                best = d2(ps, i, set.splat[j]);
+        if (d2(ps, i, set.splat[near[i]]) != best)
+            fail_msg("splat %zu: sample %u at %g, the nearest is at %g", i, near[i],
+                     sqrt(d2(ps, i, set.splat[near[i]])), sqrt(best));
+    }
+    sg_free(near);
+    sg_sample_set_free(&set);
+    sg_world_destroy(w);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_samples_thin_spacing_coverage_determinism),
+        cmocka_unit_test(test_samples_refine_follows_a_step),
+        cmocka_unit_test(test_samples_interpolate),
+        cmocka_unit_test(test_samples_nearest),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
