@@ -13,6 +13,8 @@
 #include <string.h>
 
 #include "core/alloc.h"
+#include "bake/bake.h"
+#include "bake/bake_io.h"
 #include "io/mesh.h"
 #include "io/scene_file.h"
 #include "render/world.h"
@@ -117,11 +119,72 @@ static void test_alloc_faults_world_from_scene_file(void **state)
     assert_true(n > 10); /* points, kNN, normals, tree, envmap tables... */
 }
 
+/* The bake: a glossy and a diffuse model, so that sample points, glossy
+ * bins and their file sections are all allocated. The world is built once,
+ * outside the faults. */
+typedef struct bake_ctx {
+    const sg_world *w;
+    const char *path;
+} bake_ctx;
+
+static sg_bake_desc small_bake(void)
+{
+    return (sg_bake_desc){.photons = {.count = 4096, .seed = 3, .threads = 1},
+                          .gather = {.k = 16, .threads = 1},
+                          .direct_samples = 2,
+                          .glossy_rays = 8};
+}
+
+static sg_status bake_and_save(void *p, sg_error *err)
+{
+    const bake_ctx *c = p;
+    sg_bake_desc d = small_bake();
+    sg_bake *b = NULL;
+    sg_status st = sg_bake_create(c->w, &d, &b, err);
+    if (st == SG_OK)
+        st = sg_bake_save(b, c->path, 77, err);
+    sg_bake_destroy(b);
+    return st;
+}
+
+static sg_status load_bake(void *p, sg_error *err)
+{
+    const bake_ctx *c = p;
+    sg_bake *b = NULL;
+    sg_status st = sg_bake_load(c->path, c->w, 77, &b, err);
+    sg_bake_destroy(b);
+    return st;
+}
+
+static const char GLOSSY_SCENE[] =
+    "{\"models\":[{\"builtin\":\"sphere\",\"points\":500,"
+    "\"material\":{\"type\":\"ggx\",\"roughness\":0.5,\"specular\":0.3}},"
+    "{\"builtin\":\"sphere\",\"points\":300,\"transform\":{\"translate\":[2.5,0,0]}}],"
+    "\"envmap\":{\"builtin\":\"sky\"}}";
+
+static void test_alloc_faults_bake_save_load(void **state)
+{
+    (void)state;
+    sg_scene_file sf = {0};
+    sg_error err = {0};
+    assert_int_equal(sg_scene_file_parse(GLOSSY_SCENE, strlen(GLOSSY_SCENE), "g.json", NULL, &sf, &err), SG_OK);
+    sg_world *w = NULL;
+    assert_int_equal(sg_world_create(&sf, &w, &err), SG_OK);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/faults.sgbake", sg_test_tmpdir());
+    bake_ctx c = {w, path};
+    assert_true(fail_each_allocation("bake", bake_and_save, &c) > 0);
+    assert_true(fail_each_allocation("bake load", load_bake, &c) > 0);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_alloc_faults_mesh_readers),
         cmocka_unit_test(test_alloc_faults_world_from_scene_file),
+        cmocka_unit_test(test_alloc_faults_bake_save_load),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
