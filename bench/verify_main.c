@@ -17,7 +17,7 @@ static const char usage[] =
     "Speed against accuracy and the stability map: CSV and Markdown in --out-dir.\n"
     "  --ci               tiny sizes, built-in bunny only (the ctest sweep, < 1 min)\n"
     "  --parts A,B,...    stability, surfaces, bake, scaling, headline, all (default all)\n"
-    "  --sizes A,B,...    scaling point counts (default 2000,8000,32000,128000,512000,2000000;\n"
+    "  --sizes A,B,...    scaling point counts (default 2000,8000,32000,128000,512000,1000000;\n"
     "                     up to 24000000 fits in 24 GiB; --ci: 2000,8000)\n"
     "  --case NAME        stability: only this case (see --list-cases)\n"
     "  --timeout S        stability: seconds per case and model (default 300; --ci 60)\n"

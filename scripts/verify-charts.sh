@@ -134,7 +134,7 @@ fi
 csv="$dir/stability.csv"
 if [ -f "$csv" ]; then
   # Columns of stability.csv: 1 case, 2 model, 3 status, 7 hole_rate, 9 normal_err_deg, 11 bake_rel_mse,
-  # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 22 ref_energy_vs_clean.
+  # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 23 ref_energy_vs_clean.
   # Cells: x = metric x model, y = case; colour = badness in [0, 1] on each metric's own scale.
   awk -F, '
     BEGIN { n = 0 }
@@ -147,7 +147,7 @@ if [ -f "$csv" ]; then
       v[2] = ($12 - 1) * 100;      s[2] = 20;    f[2] = "%+.1f"  # energy error %
       v[3] = $11;                  s[3] = 0.1;   f[3] = "%.3f"   # relMSE
       v[4] = $14 + $15;            s[4] = 1;     f[4] = "%d"     # NaN pixels
-      v[5] = ($22 == "" ? "" : ($22 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
+      v[5] = ($23 == "" ? "" : ($23 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
       for (k = 0; k < 6; k++) {
         x = 2 * k + m
         if (!ok) { c = 1; lab = $3 }

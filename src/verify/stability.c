@@ -30,13 +30,13 @@
 #include "verify/truth.h"
 #include "verify/verify_int.h"
 
-#define NFIG 17 /* figures a child reports, in the order of fig_names */
+#define NFIG 18 /* figures a child reports, in the order of fig_names */
 static const char *const fig_names[NFIG] = {
     "points",       "truth_pixels", "hole_rate", "spill_rate", "normal_err_deg", "flipped_rate",
     "bake_rel_mse", "bake_energy_ratio", "bake_p99", "bake_nan", "ref_nan", "ref_lum", "bake_lum",
-    "world_s",      "ref_s",        "ref_cached", "bake_s"};
+    "world_s",      "ref_s",        "ref_cached", "bake_s",   "ref_noise_rel_mse"};
 enum { F_POINTS, F_TRUTHPIX, F_HOLE, F_SPILL, F_NORMAL, F_FLIP, F_RELMSE, F_ENERGY, F_P99, F_BAKENAN, F_REFNAN,
-       F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES };
+       F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES, F_NOISE };
 
 static const char *model_name(sg_surface_model m) { return m == SG_SURFACE_DISK ? "disk" : "mls"; }
 
@@ -93,6 +93,11 @@ static sg_status run_case(const vctx *c, int ci, sg_surface_model model, double 
         goto done;
     fig[F_REFS] = ref.seconds;
     fig[F_CACHED] = cached;
+    /* The relMSE the reference owes to its own noise: a floor under the
+     * bake's figure (image_metrics.h). */
+    st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &fig[F_NOISE], err);
+    if (st != SG_OK)
+        goto done;
 
     sg_bake_desc bd = {.photons = {.count = z.photons}, .direct_samples = z.direct};
     t0 = omp_get_wtime();

@@ -163,8 +163,9 @@ static double world_mib(const sg_world *w, size_t *splats)
     return bytes / (1024.0 * 1024.0);
 }
 
+/* The reference, and the relMSE it owes to its own noise (*noise). */
 static sg_status reference(const vctx *c, const plan *p, const sg_world *w, const sg_scene_file *sf,
-                           const sg_camera *cam, sg_ref_result *ref, sg_error *err)
+                           const sg_camera *cam, sg_ref_result *ref, double *noise, sg_error *err)
 {
     sg_verify_ref_desc rd = {.camera = *cam, .width = p->image, .height = p->image, .spp = p->spp,
                              .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(sf)};
@@ -172,8 +173,10 @@ static sg_status reference(const vctx *c, const plan *p, const sg_world *w, cons
     char path[4200];
     sg_status st = sg_verify_reference(w, &rd, ref, &cached, path, sizeof path, err);
     if (st == SG_OK)
-        sg_verify__log(c, "  reference %dx%d, %d spp: %.1f s%s (%s)\n", p->image, p->image, p->spp, ref->seconds,
-                       cached ? ", cached" : "", path);
+        st = sg_image_noise_rel_mse(&ref->mean, &ref->std_error, 0.0, noise, err);
+    if (st == SG_OK)
+        sg_verify__log(c, "  reference %dx%d, %d spp: %.1f s%s, own noise relMSE %.2g (%s)\n", p->image, p->image,
+                       p->spp, ref->seconds, cached ? ", cached" : "", *noise, path);
     return st;
 }
 
@@ -271,9 +274,10 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
     vtable t = {0};
     sg_verify__tprintf(&t, "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,"
                            "frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,"
-                           "isects_per_ray,splats_per_ray,scene_mib\n");
+                           "isects_per_ray,splats_per_ray,scene_mib,ref_noise\n");
     sg_ref_result ref = {0};
     sg_image direct_ref = {0};
+    double noise = 0;
     sg_status st = SG_OK;
     sg_bake_desc bd = {.photons = {.count = p->photons}, .direct_samples = p->direct};
     sg_verify__log(c, "surfaces: %s, %zu points + ground, bake %zu photons k 64 direct %d; error %dx%d, frames %dx%d\n",
@@ -289,7 +293,7 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
         size_t splats;
         double mib = world_mib(w, &splats);
         if (i == 0)
-            st = reference(c, p, w, &sf, &ms->cam, &ref, err);
+            st = reference(c, p, w, &sf, &ms->cam, &ref, &noise, err);
         direct_run dr = {0};
         bake_run br = {0};
         if (st == SG_OK)
@@ -320,13 +324,14 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
             for (int k = 0; k < 2; k++) {
                 const sg_image_metrics *m = k == 0 ? &mb : &md;
                 double fs = k == 0 ? br.frame_s : dr.frame_s;
-                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f\n",
+                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g\n",
                                    cfg->name, cfg->model == SG_SURFACE_DISK ? "disk" : "mls", cfg->kd_disable, cfg->spc,
                                    (double)cfg->radius_scale, splats, k == 0 ? "bake_lookup" : "direct", build_s,
                                    k == 0 ? br.bake_s : 0.0, fs, fs > 0 ? 1.0 / fs : 0.0, p->frame, m->rel_mse,
                                    m->energy_ratio_lum, m->p99_rel_error, m->nan_pixels + m->inf_pixels,
                                    per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
-                                   per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), mib);
+                                   per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), mib,
+                                   k == 0 ? noise : 0.0);
                 t.rows++;
             }
             sg_verify__log(c, "  %-20s build %.2f s, bake %.2f s, lookup frame %.4f s, relMSE %.5f energy %.4f; "
@@ -370,16 +375,16 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
         pts[n++] = (bake_pt){"k", 20000, 16, 2};
         pts[n++] = (bake_pt){"direct", 20000, 64, 1};
     } else {
-        static const size_t ph[] = {250000, 500000, 1000000, 2000000, 4000000};
-        for (int i = 0; i < 5; i++)
-            pts[n++] = (bake_pt){"photons", ph[i], 64, 16};
-        for (int i = 0; i < 5; i++)
-            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1};
-        static const size_t ks[] = {16, 32, 128, 256};
-        for (int i = 0; i < 4; i++)
-            pts[n++] = (bake_pt){"k", 1000000, ks[i], 16};
-        static const int ds[] = {1, 4, 32};
+        static const size_t ph[] = {250000, 1000000, 4000000};
         for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"photons", ph[i], 64, 16};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1};
+        static const size_t ks[] = {16, 32, 128};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"k", 1000000, ks[i], 16};
+        static const int ds[] = {1, 4};
+        for (int i = 0; i < 2; i++)
             pts[n++] = (bake_pt){"direct", 1000000, 64, ds[i]};
     }
     sg_scene_file sf = {0};
@@ -392,10 +397,11 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
     world_mib(w, &splats);
     sg_verify__log(c, "bake: %s, %zu splats, %d bakes\n", ms->name, splats, n);
     sg_ref_result ref = {0};
-    st = reference(c, p, w, &sf, &ms->cam, &ref, err);
+    double noise = 0;
+    st = reference(c, p, w, &sf, &ms->cam, &ref, &noise, err);
     vtable t = {0};
     sg_verify__tprintf(&t, "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,"
-                           "frame_size,rel_mse,energy_ratio,p99,nan\n");
+                           "frame_size,rel_mse,energy_ratio,p99,nan,ref_noise\n");
     double best_s = INFINITY, best_err = INFINITY;
     int best = -1, best_reached = 0;
     for (int i = 0; i < n && st == SG_OK; i++) {
@@ -413,10 +419,10 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
         sg_image_free(&br.img);
         if (st != SG_OK)
             break;
-        sg_verify__tprintf(&t, "%s,%zu,%zu,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.3f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu\n",
+        sg_verify__tprintf(&t, "%s,%zu,%zu,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.3f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3g\n",
                            pts[i].sweep, pts[i].photons, pts[i].k, pts[i].direct, splats, br.trace_s, br.gather_s,
                            br.direct_s, br.bake_s, br.bake_mib, br.frame_s, 1.0 / br.frame_s, p->frame, m.rel_mse,
-                           m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels);
+                           m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels, noise);
         t.rows++;
         sg_verify__log(c, "  %-21s photons %8zu k %3zu direct %3d: bake %.2f s (trace %.2f, gather %.2f), relMSE %.5f "
                           "energy %.4f p99 %.3f\n",
@@ -510,7 +516,7 @@ static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int
     sg_verify__log(c, "headline: %d models, bake %zu photons k %zu direct %d (%s)\n", nmodels, photons, k, direct, why);
     vtable t = {0}, md = {0};
     sg_verify__tprintf(&t, "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,"
-                           "bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size\n");
+                           "bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise\n");
     sg_verify__tprintf(&md, "Bake: %zu photons, gather k %zu, direct-light samples %d (%s, chosen by the bake sweep "
                             "on the first model). fps: the bake's lookup frame at %dx%d; error: its %dx%d frame "
                             "against a %d-spp reference at pixel centres.\n\n"
@@ -529,7 +535,8 @@ static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int
         size_t splats;
         double mib = world_mib(w, &splats);
         sg_ref_result ref = {0};
-        st = reference(c, p, w, &sf, &ms->cam, &ref, err);
+        double noise = 0;
+        st = reference(c, p, w, &sf, &ms->cam, &ref, &noise, err);
         bake_run br = {0};
         sg_bake_desc bd = {.photons = {.count = photons}, .gather = {.k = (unsigned)k}, .direct_samples = direct};
         if (st == SG_OK)
@@ -541,10 +548,10 @@ static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int
             st = sg_verify__compare(c, &br.img, &ref.mean, name, &m, err);
         double rss = sg_verify__rss_mib();
         if (st == SG_OK) {
-            sg_verify__tprintf(&t, "%s,%zu,%zu,%zu,%zu,%d,%.4f,%.6f,%.3f,%d,%.3f,%.3f,%.1f,%.6g,%.6g,%.6g,%zu,%d,%d\n",
+            sg_verify__tprintf(&t, "%s,%zu,%zu,%zu,%zu,%d,%.4f,%.6f,%.3f,%d,%.3f,%.3f,%.1f,%.6g,%.6g,%.6g,%zu,%d,%d,%.3g\n",
                                ms->name, p->points, splats, photons, k, direct, br.bake_s, br.frame_s,
                                1.0 / br.frame_s, p->frame, mib, br.bake_mib, rss, m.rel_mse, m.energy_ratio_lum,
-                               m.p99_rel_error, m.nan_pixels + m.inf_pixels, p->spp, p->image);
+                               m.p99_rel_error, m.nan_pixels + m.inf_pixels, p->spp, p->image, noise);
             t.rows++;
             sg_verify__tprintf(&md, "| %s | %zu (%zu) | %.1f | %.2f | %.1f + %.1f; %.0f | %.4f | %.4f | %.3f | %zu |\n",
                                ms->name, p->points, splats, 1.0 / br.frame_s, br.bake_s, mib, br.bake_mib, rss,

@@ -172,7 +172,7 @@ sg_status sg_verify_run(const sg_verify_desc *d, sg_verify_summary *summary, sg_
     if (!(c.d.case_timeout_s > 0))
         c.d.case_timeout_s = c.d.ci ? 60 : 300;
     if (c.d.n_sizes == 0) {
-        static const size_t full[] = {2000, 8000, 32000, 128000, 512000, 2000000}, ci[] = {2000, 8000};
+        static const size_t full[] = {2000, 8000, 32000, 128000, 512000, 1000000}, ci[] = {2000, 8000};
         const size_t *s = c.d.ci ? ci : full;
         c.d.n_sizes = c.d.ci ? 2 : 6;
         memcpy(c.d.sizes, s, sizeof(size_t) * (size_t)c.d.n_sizes);

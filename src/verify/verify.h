@@ -71,7 +71,7 @@ typedef struct sg_verify_desc {
     const char *work_dir;    /* generated inputs; default "out/verify/work" */
     const char *data_dir;    /* real data; default SG_SHARED_DATA_DIR      */
     size_t sizes[SG_VERIFY_MAX_SIZES]; /* SCALING point counts; n_sizes 0 =
-                                default 2k,8k,32k,128k,512k,2M (ci 2k,8k) */
+                                default 2k,8k,32k,128k,512k,1M (ci 2k,8k) */
     int n_sizes;
     double case_timeout_s;   /* per stability child; default 300 (ci 60)   */
     const char *only_case;   /* STABILITY: just this case; NULL = all      */

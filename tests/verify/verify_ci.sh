@@ -47,7 +47,7 @@ rows() { awk 'END { print NR - 1 }' "$1"; }
 
 # Stability: every case x {mls, disk}, once each, ok, no NaN.
 S=$OUT/stability.csv
-check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_energy_vs_clean,baseline" "1,2,3,23" 22
+check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_noise_rel_mse,ref_energy_vs_clean,baseline" "1,2,3,24" 23
 ncase=0
 for c in $("$VERIFY" --list-cases); do
   ncase=$((ncase + 1))
@@ -60,24 +60,24 @@ done
 [ "$(rows "$S")" -eq $((2 * ncase)) ] || fail "stability.csv: $(rows "$S") rows, want $((2 * ncase))"
 awk -F, 'NR > 1 && ($3 != "ok" || $14 != 0 || $15 != 0) { print "flagged: " $0; bad = 1 } END { exit bad }' "$S" ||
   fail "stability cases flagged"
-awk -F, 'NR > 1 && $23 != "-" && $22 == "" { print "no energy against the clean twin: " $0; bad = 1 } END { exit bad }' "$S" ||
+awk -F, 'NR > 1 && $24 != "-" && $23 == "" { print "no energy against the clean twin: " $0; bad = 1 } END { exit bad }' "$S" ||
   fail "missing baseline figures"
 [ -s "$OUT/stability.md" ] || fail "no stability.md"
 
 # Sweeps: the --ci plan (src/verify/sweeps.c): 4 surface configurations x
 # 2 renderers, 6 bakes, 2 sizes, 1 headline model.
-check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib" "1,2,7"
+check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise" "1,2,7"
 [ "$(rows "$OUT/surfaces.csv")" -eq 8 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 8"
 for c in mls mls_no_refinements disk disk_r1.5; do
   for r in bake_lookup direct; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
 done
-check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan" "1"
+check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise" "1"
 [ "$(rows "$OUT/bake.csv")" -eq 6 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 6"
 check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
 [ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
-check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size" "1"
+check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise" "1"
 [ "$(awk -F, 'NR > 1 { print $1 }' "$OUT/headline.csv")" = "bunny" ] || fail "headline.csv: want one bunny row"
 [ -s "$OUT/headline.md" ] || fail "no headline.md"
 awk -F, 'FNR > 1 && $0 ~ /,nan,|,inf,/ { bad = 1 } END { exit bad }' "$OUT"/*.csv || fail "nan or inf in a CSV"
