@@ -77,34 +77,42 @@ static void test_metrics_scale_by_one_plus_e(void **state)
     sg_image_free(&b);
 }
 
-/* 2. p99 picks the rank-ceil(0.99 n) pixel: n = 200 (rank 198) on b = v,
- * outliers raising all three channels by d1 < d2 < d3. Three outliers:
- * ranks 198..200 hold them, so p99 = d1 / (v sqrt(1.01)); two outliers:
- * rank 198 is an unchanged pixel, p99 = 0; the maximum is always d3's. */
+/* 2. p99 picks the rank-ceil(0.99 n) pixel, on b = v with outliers
+ * raising all three channels by d1 < d2 < d3 (r = d^2 / (1.01 v^2)).
+ * n = 200 (rank 198): with three outliers ranks 198..200 hold them and
+ * p99 = d1 / (v sqrt(1.01)); with two, rank 198 is unchanged: p99 = 0.
+ * n = 150 (0.99 n = 148.5, rank 149, where rounding down would give 148):
+ * with two outliers p99 = d2's, with one it is 0. The maximum is always
+ * d3's, and relMSE the outliers' r summed over n. */
 static void test_metrics_p99_rank_with_outliers(void **state)
 {
     (void)state;
     const double v = 2.0, d[3] = {0.5, 1.0, 4.0};
-    const int pix[3] = {7, 120, 199};
-    for (int count = 2; count <= 3; count++) {
-        sg_image a = alloc_image(20, 10), b = alloc_image(20, 10);
-        for (int i = 0; i < 600; i++)
+    const int pix[3] = {7, 120, 149};
+    const struct {
+        int w, h, count;
+        double want_d; /* 0: p99 is 0 */
+    } cases[4] = {{20, 10, 3, 0.5}, {20, 10, 2, 0.0}, {15, 10, 2, 1.0}, {15, 10, 1, 0.0}};
+    for (int q = 0; q < 4; q++) {
+        int w = cases[q].w, h = cases[q].h, n = w * h, count = cases[q].count;
+        sg_image a = alloc_image(w, h), b = alloc_image(w, h);
+        for (int i = 0; i < 3 * n; i++)
             a.data[i] = b.data[i] = (float)v;
         for (int k = 3 - count; k < 3; k++)
             for (int c = 0; c < 3; c++)
                 a.data[3 * pix[k] + c] = (float)(v + d[k]);
         sg_image_metrics m = compare(&a, &b);
-        double want = count == 3 ? d[0] / (v * sqrt(1.01)) : 0.0;
+        double want = cases[q].want_d / (v * sqrt(1.01));
         if (fabs(m.p99_rel_error - want) > 1e-12)
-            fail_msg("%d outliers: p99 %.17g, want %.17g", count, m.p99_rel_error, want);
+            fail_msg("%d pixels, %d outliers: p99 %.17g, want %.17g", n, count, m.p99_rel_error, want);
         double maxr = d[2] / (v * sqrt(1.01));
         if (fabs(m.max_rel_error - maxr) > 1e-12)
-            fail_msg("%d outliers: max %.17g, want %.17g", count, m.max_rel_error, maxr);
+            fail_msg("%d pixels, %d outliers: max %.17g, want %.17g", n, count, m.max_rel_error, maxr);
         double sum = 0;
         for (int k = 3 - count; k < 3; k++)
             sum += d[k] * d[k] / (1.01 * v * v);
-        if (fabs(m.rel_mse - sum / 200) > 1e-12 * sum)
-            fail_msg("%d outliers: relMSE %.17g, want %.17g", count, m.rel_mse, sum / 200);
+        if (fabs(m.rel_mse - sum / n) > 1e-12 * sum)
+            fail_msg("%d pixels, %d outliers: relMSE %.17g, want %.17g", n, count, m.rel_mse, sum / n);
         sg_image_free(&a);
         sg_image_free(&b);
     }
