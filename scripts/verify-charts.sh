@@ -36,6 +36,7 @@ if [ -f "$csv" ]; then
   pts="$(awk -F, 'NR == 2 { print $6 }' "$csv")"
   plot "$dir/verify_surfaces.png" <<GP
 set terminal $(term 1400 620)
+set termoption noenhanced
 set multiplot layout 1,2 title "Surface models: frame time against error ($pts splats, ${fs}x${fs} frames, best of 2)"
 set logscale y
 set grid lc rgb "#cccccc"
@@ -44,17 +45,16 @@ set xlabel "bake lookup frame time (ms)"
 set ylabel "relMSE against the converged reference of the default MLS surface"
 set title "bake + lookup (global illumination)"
 plot "$tmpd/sb_mls" u 1:2 w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS", \
-     "$tmpd/sb_mls" u 1:2:3 w labels noenhanced offset char 0,0.8 font ",8" notitle, \
+     "$tmpd/sb_mls" u 1:2:3 w labels offset char 0,0.8 font ",8" notitle, \
      "$tmpd/sb_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
-     "$tmpd/sb_disk" u 1:2:3 w labels noenhanced offset char 0,-0.8 font ",8" notitle
-set xlabel "direct renderer frame time (ms), SG\\\\_SHADE\\\\_SIMPLE, model only"
+     "$tmpd/sb_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
+set xlabel "direct renderer frame time (ms), SG_SHADE_SIMPLE, model only"
 set ylabel "relMSE against the default MLS surface's direct frame (the yardstick, 0)"
-set format y "10^{%L}"
 set title "direct renderer (geometry only)"
 plot "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6) w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS options", \
-     "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6):3 w labels noenhanced offset char 0,0.8 font ",8" notitle, \
+     "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6):3 w labels offset char 0,0.8 font ",8" notitle, \
      "$tmpd/sd_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
-     "$tmpd/sd_disk" u 1:2:3 w labels noenhanced offset char 0,-0.8 font ",8" notitle
+     "$tmpd/sd_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
 unset multiplot
 GP
 fi
@@ -68,7 +68,7 @@ if [ -f "$csv" ]; then
   i=0
   for sw in photons photons_carry_direct k direct; do
     f="$tmpd/b_$sw"
-    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? sprintf("%gk", $2 / 1000) : (s == "k" ? "k " $3 : "S " $4); print $9, $14, lab }' "$csv" | sort -n >"$f"
+    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : "S=" $4); print $9, $14, lab }' "$csv" | sort -n >"$f"
     [ -s "$f" ] || continue
     c="${colours[$i]}"
     case "$sw" in
@@ -78,13 +78,14 @@ if [ -f "$csv" ]; then
       direct) t="direct-light samples S ($(awk -F, 'NR > 1 && $1 == "direct" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
     esac
     plots+=("\"$f\" u 1:2 w linespoints lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
-    plots+=("\"$f\" u 1:2:3 w labels noenhanced offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
+    plots+=("\"$f\" u 1:2:3 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
     i=$((i + 1))
   done
   pts="$(awk -F, 'NR == 2 { print $5 }' "$csv")"
   plot_cmd="$(IFS=,; echo "${plots[*]}")"
   plot "$dir/verify_bake.png" <<GP
 set terminal $(term 1100 750)
+set termoption noenhanced
 set logscale xy
 set grid xtics ytics mxtics mytics lc rgb "#cccccc" dt 3
 set xlabel "bake time (s): photon trace + gather + direct light"
@@ -170,7 +171,7 @@ set xrange [-0.5:11.5]
 set yrange [-0.5:$n - 0.5]
 set xtics ("holes %%\nMLS" 0, "holes %%\ndisks" 1, "normal err deg\nMLS" 2, "normal err deg\ndisks" 3, \
   "bake energy %%\nMLS" 4, "bake energy %%\ndisks" 5, "bake relMSE\nMLS" 6, "bake relMSE\ndisks" 7, \
-  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref energy vs clean %%\nMLS" 10, "ref energy vs clean %%\ndisks" 11) font ",8"
+  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref vs clean %%\nMLS" 10, "ref vs clean %%\ndisks" 11) font ",8"
 set x2tics ("scale 10" 0.5, "scale 30" 2.5, "scale 20" 4.5, "scale 0.1" 6.5, "scale 1" 8.5, "scale 10" 10.5) font ",8"
 set ytics ($ytics) font ",9" noenhanced
 set cbrange [-1:1]
@@ -178,6 +179,6 @@ set palette defined (-1 "#dddddd", -0.001 "#dddddd", 0 "#ffffff", 0.3 "#ffe9a8",
 unset colorbox
 set lmargin 16
 set bmargin 4
-plot "$tmpd/st" u 1:2:3 w image notitle, "$tmpd/st" u 1:2:4 w labels noenhanced font ",9" notitle
+plot "$tmpd/st" u 1:2:3 w image notitle, "$tmpd/st" u 1:2:4 w labels font ",9" notitle
 GP
 fi
