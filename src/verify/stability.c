@@ -260,7 +260,7 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
     }
     sizes z = case_sizes(c);
     sg_verify__log(c, "stability: %d cases x {mls, disk}; %dx%d, reference %d spp, bake %zu photons, direct %d; "
-                      "limit %.0f s per run\n",
+                      "limit %.3g s per run\n",
                    n, z.image, z.image, z.spp, z.photons, z.direct, c->d.case_timeout_s);
     int run[64] = {0};
     for (int i = 0; i < n; i++) {
