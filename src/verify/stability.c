@@ -262,7 +262,11 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
     sg_verify__log(c, "stability: %d cases x {mls, disk}; %dx%d, reference %d spp, bake %zu photons, direct %d; "
                       "limit %.3g s per run\n",
                    n, z.image, z.image, z.spp, z.photons, z.direct, c->d.case_timeout_s);
-    int run[64] = {0};
+    int run[64] = {0}; /* run[i]: case i selected (--case) */
+    if (n > 64) {
+        free(rows);
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "stability: %d cases, at most 64", n);
+    }
     for (int i = 0; i < n; i++) {
         run[i] = !c->d.only_case || strcmp(c->d.only_case, sg_verify_case_name(i)) == 0;
         if (!run[i])

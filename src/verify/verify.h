@@ -11,9 +11,10 @@
  *              energy against its clean twin's. A child that crashes, runs
  *              out of time, or yields a non-finite figure is flagged in the
  *              `status` column (ok, nan, timeout, crash, error).
- *   SURFACES   the main scene (the Stanford dragon under courtyard.exr when
- *              ../shared/data has them, else the built-in bunny under the
- *              analytic sky; always the bunny with `ci`) for each surface
+ *   SURFACES   the main scene (the Stanford dragon on the built-in ground
+ *              under courtyard.exr when ../shared/data has them, else the
+ *              built-in bunny under the analytic sky; with `ci` always the
+ *              bunny, without the ground) for each surface
  *              configuration (MLS / disks, kd-tree refinements, samples per
  *              cell, splat radius scale): one bake with fixed parameters;
  *              its lookup frame time and error against the reference of
