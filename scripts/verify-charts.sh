@@ -118,12 +118,17 @@ set title "frame rate"
 plot "$tmpd/sc" u 1:7 w lp lw 2 pt 7 t "direct renderer (1 ray/pixel)", "$tmpd/sc" u 1:16 w lp lw 2 pt 5 t "bake lookup frame"
 set ylabel "MiB"
 set title "memory"
+set key top left
 plot "$tmpd/sc" u 1:4 w lp lw 2 pt 7 t "scene (kd-tree + splats)", "$tmpd/sc" u 1:14 w lp lw 2 pt 5 t "bake (irradiance)", "$tmpd/sc" u 1:5 w lp lw 2 pt 9 t "process RSS"
 unset logscale y
 set ylabel "per primary ray"
+set yrange [0:*]
+set key center right
 set title "traversal (sg\\\\_ray\\\\_stats)"
 plot "$tmpd/sc" u 1:9 w lp lw 2 pt 7 t "node steps", "$tmpd/sc" u 1:10 w lp lw 2 pt 5 t "leaves", "$tmpd/sc" u 1:12 w lp lw 2 pt 9 t "splats evaluated"
 set logscale y
+set autoscale y
+set key top left
 set ylabel "seconds"
 set title "build and bake time"
 plot "$tmpd/sc" u 1:3 w lp lw 2 pt 7 t "world build (sampling, radii, kd-tree)", "$tmpd/sc" u 1:13 w lp lw 2 pt 5 t "bake"
