@@ -1,0 +1,189 @@
+#!/usr/bin/env bash
+# verify-charts.sh DIR — draws the verification suite's charts from the CSV
+# that splatgi-verify wrote into DIR, into DIR:
+#   verify_surfaces.png   frame time against error per surface model/option
+#   verify_bake.png       bake time against error (photons, k, direct samples)
+#   verify_scaling.png    fps, memory, per-ray traversal, times against model size
+#   verify_stability.png  the stability map as a heat-map table
+# A chart whose CSV is absent is skipped. Exit 77 when gnuplot is missing.
+set -euo pipefail
+dir="${1:?usage: verify-charts.sh DIR}"
+command -v gnuplot >/dev/null || { echo "verify-charts: gnuplot not found (install gnuplot-nox)"; exit 77; }
+if gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1; then
+  term() { echo "pngcairo size $1,$2 enhanced font \"sans,10\""; }
+else
+  term() { echo "png size $1,$2"; }
+fi
+tmpd="$(mktemp -d)"
+trap 'rm -rf "$tmpd"' EXIT
+# Writes gnuplot's output to a temporary name, then renames it.
+plot() { # plot OUT.png < script
+  local out="$1" tmp="$1.tmp$$.png"
+  { echo "set output \"$tmp\""; cat; } | gnuplot
+  mv "$tmp" "$out"
+  echo "verify-charts: wrote $out"
+}
+
+# ---- 1. surfaces: frame time against error --------------------------------
+csv="$dir/surfaces.csv"
+if [ -f "$csv" ]; then
+  # columns: 1 config, 2 model, 7 renderer, 10 frame_s, 12 frame_size, 13 rel_mse, 17 nodes/ray, 20 splats/ray
+  awk -F, 'NR > 1 && $7 == "bake_lookup" && $2 == "mls" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sb_mls"
+  awk -F, 'NR > 1 && $7 == "bake_lookup" && $2 == "disk" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sb_disk"
+  awk -F, 'NR > 1 && $7 == "direct" && $1 != "mls" && $2 == "mls" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sd_mls"
+  awk -F, 'NR > 1 && $7 == "direct" && $2 == "disk" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sd_disk"
+  fs="$(awk -F, 'NR == 2 { print $12 }' "$csv")"
+  pts="$(awk -F, 'NR == 2 { print $6 }' "$csv")"
+  plot "$dir/verify_surfaces.png" <<GP
+set terminal $(term 1400 620)
+set termoption noenhanced
+set multiplot layout 1,2 title "Surface models: frame time against error ($pts splats, ${fs}x${fs} frames, best of 2)"
+set logscale y
+set grid lc rgb "#cccccc"
+set key top left box opaque font ",9"
+set xlabel "bake lookup frame time (ms)"
+set ylabel "relMSE against the converged reference of the default MLS surface"
+set title "bake + lookup (global illumination)"
+plot "$tmpd/sb_mls" u 1:2 w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS", \
+     "$tmpd/sb_mls" u 1:2:3 w labels offset char 0,0.8 font ",8" notitle, \
+     "$tmpd/sb_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
+     "$tmpd/sb_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
+set xlabel "direct renderer frame time (ms), SG_SHADE_SIMPLE, model only"
+set ylabel "relMSE against the default MLS surface's direct frame (the yardstick, 0)"
+set title "direct renderer (geometry only)"
+plot "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6) w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS options", \
+     "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6):3 w labels offset char 0,0.8 font ",8" notitle, \
+     "$tmpd/sd_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
+     "$tmpd/sd_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
+unset multiplot
+GP
+fi
+
+# ---- 2. bake: bake time against error ---------------------------------------
+csv="$dir/bake.csv"
+if [ -f "$csv" ]; then
+  # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse
+  plots=()
+  colours=("#1f6fb4" "#d62728" "#2ca02c" "#9467bd" "#ff7f0e")
+  i=0
+  for sw in photons photons_carry_direct k direct; do
+    f="$tmpd/b_$sw"
+    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : "S=" $4); print $9, $14, lab }' "$csv" | sort -n >"$f"
+    [ -s "$f" ] || continue
+    c="${colours[$i]}"
+    case "$sw" in
+      photons) t="photon count (k 64, direct light by S = $(awk -F, 'NR > 1 && $1 == "photons" { print $4; exit }' "$csv") shadow rays)";;
+      photons_carry_direct) t="photon count, photons carry the direct light (k 64)";;
+      k) t="gather k ($(awk -F, 'NR > 1 && $1 == "k" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
+      direct) t="direct-light samples S ($(awk -F, 'NR > 1 && $1 == "direct" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
+    esac
+    plots+=("\"$f\" u 1:2 w linespoints lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
+    plots+=("\"$f\" u 1:2:3 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
+    i=$((i + 1))
+  done
+  pts="$(awk -F, 'NR == 2 { print $5 }' "$csv")"
+  plot_cmd="$(IFS=,; echo "${plots[*]}")"
+  plot "$dir/verify_bake.png" <<GP
+set terminal $(term 1100 750)
+set termoption noenhanced
+set logscale xy
+set grid xtics ytics mxtics mytics lc rgb "#cccccc" dt 3
+set xlabel "bake time (s): photon trace + gather + direct light"
+set ylabel "relMSE of the lookup frame against the converged reference"
+set title "Bake: time against error ($pts splats)"
+set key top right box opaque font ",9"
+set arrow from graph 0, first 0.01 to graph 1, first 0.01 nohead dt 4 lc rgb "#b40000"
+plot $plot_cmd
+GP
+fi
+
+# ---- 3. scaling with model size --------------------------------------------
+csv="$dir/scaling.csv"
+if [ -f "$csv" ] && [ "$(wc -l <"$csv")" -gt 2 ]; then
+  # 1 points, 3 build_s, 4 scene_mib, 5 rss_mib, 7 direct_fps, 9 nodes, 10 leaves, 11 isects, 12 splats,
+  # 13 bake_s, 14 bake_mib, 16 lookup_fps, 17 frame_size
+  fs="$(awk -F, 'NR == 2 { print $17 }' "$csv")"
+  awk -F, 'NR > 1' OFS=' ' "$csv" | tr ',' ' ' >"$tmpd/sc"
+  plot "$dir/verify_scaling.png" <<GP
+set terminal $(term 1300 900)
+set multiplot layout 2,2 title "Scaling with model size (model alone, ${fs}x${fs} frames)"
+set logscale x
+set grid lc rgb "#cccccc"
+set key top right box opaque font ",9"
+set xlabel "points"
+set format x "10^{%L}"
+set logscale y
+set ylabel "frames per second"
+set title "frame rate"
+plot "$tmpd/sc" u 1:7 w lp lw 2 pt 7 t "direct renderer (1 ray/pixel)", "$tmpd/sc" u 1:16 w lp lw 2 pt 5 t "bake lookup frame"
+set ylabel "MiB"
+set title "memory"
+set key top left
+plot "$tmpd/sc" u 1:4 w lp lw 2 pt 7 t "scene (kd-tree + splats)", "$tmpd/sc" u 1:14 w lp lw 2 pt 5 t "bake (irradiance)", "$tmpd/sc" u 1:5 w lp lw 2 pt 9 t "process RSS"
+unset logscale y
+set ylabel "per primary ray"
+set yrange [0:*]
+set key center right
+set title "traversal (sg\\\\_ray\\\\_stats)"
+plot "$tmpd/sc" u 1:9 w lp lw 2 pt 7 t "node steps", "$tmpd/sc" u 1:10 w lp lw 2 pt 5 t "leaves", "$tmpd/sc" u 1:12 w lp lw 2 pt 9 t "splats evaluated"
+set logscale y
+set autoscale y
+set key top left
+set ylabel "seconds"
+set title "build and bake time"
+plot "$tmpd/sc" u 1:3 w lp lw 2 pt 7 t "world build (sampling, radii, kd-tree)", "$tmpd/sc" u 1:13 w lp lw 2 pt 5 t "bake"
+unset multiplot
+GP
+fi
+
+# ---- 4. the stability map ---------------------------------------------------
+csv="$dir/stability.csv"
+if [ -f "$csv" ]; then
+  # Columns of stability.csv: 1 case, 2 model, 3 status, 7 hole_rate, 9 normal_err_deg, 11 bake_rel_mse,
+  # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 23 ref_energy_vs_clean.
+  # Cells: x = metric x model, y = case; colour = badness in [0, 1] on each metric's own scale.
+  awk -F, '
+    BEGIN { n = 0 }
+    NR == 1 { next }
+    { if (!($1 in row)) { row[$1] = n; name[n++] = $1 }
+      m = ($2 == "disk"); y = row[$1]
+      ok = ($3 == "ok" || $3 == "nan")
+      v[0] = $7 * 100;             s[0] = 10;    f[0] = "%.1f"   # holes %
+      v[1] = $9;                   s[1] = 30;    f[1] = "%.1f"   # normal error, degrees
+      v[2] = ($12 - 1) * 100;      s[2] = 20;    f[2] = "%+.1f"  # energy error %
+      v[3] = $11;                  s[3] = 0.1;   f[3] = "%.3f"   # relMSE
+      v[4] = $14 + $15;            s[4] = 1;     f[4] = "%d"     # NaN pixels
+      v[5] = ($23 == "" ? "" : ($23 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
+      for (k = 0; k < 6; k++) {
+        x = 2 * k + m
+        if (!ok) { c = 1; lab = $3 }
+        else if (v[k] == "") { c = -1; lab = "-" }
+        else { a = v[k] < 0 ? -v[k] : v[k]; c = a / s[k]; if (c > 1) c = 1; lab = sprintf(f[k], v[k]) }
+        cell[x, y] = c; text[x, y] = lab
+      }
+    }
+    END {
+      for (y = 0; y < n; y++) for (x = 0; x < 12; x++) print x, n - 1 - y, cell[x, y], text[x, y] > "'"$tmpd"'/st"
+      for (y = 0; y < n; y++) print n - 1 - y, name[y] > "'"$tmpd"'/st_names"
+      print n > "'"$tmpd"'/st_n"
+    }' "$csv"
+  n="$(cat "$tmpd/st_n")"
+  ytics="$(awk '{ printf "%s\"%s\" %d", (NR > 1 ? ", " : ""), $2, $1 }' "$tmpd/st_names")"
+  plot "$dir/verify_stability.png" <<GP
+set terminal $(term 1500 $((140 + 34 * n)))
+set title "Stability map: case x method (colour: 0 = fine, red = at or beyond the column's scale; grey: n/a)"
+set xrange [-0.5:11.5]
+set yrange [-0.5:$n - 0.5]
+set xtics ("holes %%\nMLS" 0, "holes %%\ndisks" 1, "normal err deg\nMLS" 2, "normal err deg\ndisks" 3, \
+  "bake energy %%\nMLS" 4, "bake energy %%\ndisks" 5, "bake relMSE\nMLS" 6, "bake relMSE\ndisks" 7, \
+  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref vs clean %%\nMLS" 10, "ref vs clean %%\ndisks" 11) font ",8"
+set x2tics ("scale 10" 0.5, "scale 30" 2.5, "scale 20" 4.5, "scale 0.1" 6.5, "scale 1" 8.5, "scale 10" 10.5) font ",8"
+set ytics ($ytics) font ",9" noenhanced
+set cbrange [-1:1]
+set palette defined (-1 "#dddddd", -0.001 "#dddddd", 0 "#ffffff", 0.3 "#ffe9a8", 0.7 "#f59b5b", 1 "#c8102e")
+unset colorbox
+set lmargin 16
+set bmargin 4
+plot "$tmpd/st" u 1:2:3 w image notitle, "$tmpd/st" u 1:2:4 w labels font ",9" notitle
+GP
+fi

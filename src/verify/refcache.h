@@ -1,0 +1,60 @@
+/* refcache.h — a converged reference at pixel centres, rendered once and
+ * cached on disk.
+ *
+ * What it does: renders the path tracer's estimator (ref/pathtrace.h,
+ * sg_ref_path) with every path through its pixel's CENTRE — the point the
+ * bake's lookup frame (sg_bake_render) and the direct renderers sample, so
+ * that a bake is compared with the radiance it tries to show — and keeps
+ * the mean and its standard error as EXR files under a cache folder named
+ * by a key over the scene (every part, plus the contents of its model and
+ * envmap files), the camera, the size, spp, seed and depth:
+ *     <cache>/<key>.exr, <key>.se.exr, <key>.txt (seconds and paths)
+ * Every file is written to a temporary name and renamed; the .txt is
+ * written last, so a cache entry without it is ignored.
+ * What it does NOT do: progressive refinement of a cached entry.
+ *
+ * Ownership: *out is the caller's (sg_ref_result_free).
+ */
+#ifndef SG_VERIFY_REFCACHE_H
+#define SG_VERIFY_REFCACHE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/error.h"
+#include "io/scene_file.h"
+#include "ref/pathtrace.h"
+#include "render/camera.h"
+#include "render/world.h"
+
+/* Bump when the path tracer's estimator changes. */
+#define SG_VERIFY_REF_VERSION 1u
+
+typedef struct sg_verify_ref_desc {
+    sg_camera camera;      /* required                                   */
+    int width, height;     /* required, >= 1                             */
+    int spp;               /* required, >= 1                             */
+    int max_depth;         /* default 8                                  */
+    uint64_t seed;         /* default 1                                  */
+    const char *cache_dir; /* NULL: no cache                             */
+    uint64_t scene_key;    /* sg_verify_scene_key of the world's scene   */
+} sg_verify_ref_desc;
+
+/* FNV-1a of key and the bytes of the file at path (path NULL or unreadable:
+ * key mixed with a marker for "absent"). */
+uint64_t sg_verify_hash_file(uint64_t key, const char *path);
+
+/* sg_scene_file_hash(sf, ALL) mixed with the contents of every model and
+ * envmap file the scene names. */
+uint64_t sg_verify_scene_key(const sg_scene_file *sf);
+
+/* The cache key of d (scene key, camera, size, spp, depth, seed, version). */
+uint64_t sg_verify_ref_key(const sg_verify_ref_desc *d);
+
+/* Renders (or reads from the cache) the reference. *cached says which;
+ * path (may be NULL) receives the cache file's name. A failed cache write
+ * is not an error (the image is returned). */
+sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d, sg_ref_result *out, int *cached,
+                              char *path, size_t path_cap, sg_error *err);
+
+#endif

@@ -1,0 +1,364 @@
+/* stability.c — the stability map (verify.h, STABILITY): every case of
+ * cases.h under both surface models, each in a child process with a time
+ * limit, so that a crash or a hang is a flagged row, not a lost run.
+ *
+ * Invariants:
+ *  1. One row per (case, model) whatever happens in the child: ok, nan
+ *     (a NaN/Inf pixel in either image, or a non-finite figure), timeout
+ *     (killed after case_timeout_s), crash (killed by a signal), error
+ *     (the child reported a failed call; its message is logged).
+ *  2. The child writes its figures to a file under a temporary name and
+ *     renames it; the parent reads only a complete file.
+ *  3. No OpenMP team exists in the parent when it forks (verify.c runs
+ *     this part first), so the children start with a clean runtime.
+ */
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bake/bake.h"
+#include "verify/cases.h"
+#include "verify/refcache.h"
+#include "verify/truth.h"
+#include "verify/verify_int.h"
+
+#define NFIG 18 /* figures a child reports, in the order of fig_names */
+static const char *const fig_names[NFIG] = {
+    "points",       "truth_pixels", "hole_rate", "spill_rate", "normal_err_deg", "flipped_rate",
+    "bake_rel_mse", "bake_energy_ratio", "bake_p99", "bake_nan", "ref_nan", "ref_lum", "bake_lum",
+    "world_s",      "ref_s",        "ref_cached", "bake_s",   "ref_noise_rel_mse"};
+enum { F_POINTS, F_TRUTHPIX, F_HOLE, F_SPILL, F_NORMAL, F_FLIP, F_RELMSE, F_ENERGY, F_P99, F_BAKENAN, F_REFNAN,
+       F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES, F_NOISE };
+
+static const char *model_name(sg_surface_model m) { return m == SG_SURFACE_DISK ? "disk" : "mls"; }
+
+typedef struct sizes {
+    int image, spp, direct;
+    size_t photons;
+} sizes;
+
+static sizes case_sizes(const vctx *c)
+{
+    if (c->d.ci)
+        return (sizes){.image = 24, .spp = 16, .direct = 2, .photons = 20000};
+    return (sizes){.image = 96, .spp = 256, .direct = 8, .photons = 300000};
+}
+
+/* The child's work: figures into fig[]. */
+static sg_status run_case(const vctx *c, int ci, sg_surface_model model, double fig[NFIG], sg_error *err)
+{
+    sizes z = case_sizes(c);
+    sg_verify_case vc = {0};
+    sg_world *w = NULL;
+    sg_bake *b = NULL;
+    sg_ref_result ref = {0};
+    sg_image frame = {0};
+    sg_status st = sg_verify_case_make(ci, model, c->d.ci, c->d.work_dir, &vc, err);
+    if (st != SG_OK)
+        return st;
+    double t0 = omp_get_wtime();
+    st = sg_world_create(&vc.scene, &w, err);
+    if (st != SG_OK)
+        goto done;
+    fig[F_WORLDS] = omp_get_wtime() - t0;
+    fig[F_POINTS] = 0;
+    for (uint32_t m = 0; m < (uint32_t)sg_world_model_count(w); m++) {
+        sg_scene_info info;
+        sg_scene_get_info(sg_world_scene(w, m), &info);
+        fig[F_POINTS] += (double)info.splat_count;
+    }
+    sg_truth_view_stats tv;
+    st = sg_truth_compare_view(&vc.truth, w, &vc.camera, z.image, z.image, &tv, err);
+    if (st != SG_OK)
+        goto done;
+    fig[F_TRUTHPIX] = (double)tv.truth_pixels;
+    fig[F_HOLE] = tv.hole_rate;
+    fig[F_SPILL] = tv.spill_rate;
+    fig[F_NORMAL] = tv.nonfinite_normals ? NAN : tv.normal_error_deg;
+    fig[F_FLIP] = tv.flipped_rate;
+
+    sg_verify_ref_desc rd = {.camera = vc.camera, .width = z.image, .height = z.image, .spp = z.spp,
+                             .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(&vc.scene)};
+    int cached = 0;
+    st = sg_verify_reference(w, &rd, &ref, &cached, NULL, 0, err);
+    if (st != SG_OK)
+        goto done;
+    fig[F_REFS] = ref.seconds;
+    fig[F_CACHED] = cached;
+    /* The relMSE the reference owes to its own noise: a floor under the
+     * bake's figure (image_metrics.h). */
+    st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &fig[F_NOISE], err);
+    if (st != SG_OK)
+        goto done;
+
+    sg_bake_desc bd = {.photons = {.count = z.photons}, .direct_samples = z.direct};
+    t0 = omp_get_wtime();
+    st = sg_bake_create(w, &bd, &b, err);
+    if (st != SG_OK)
+        goto done;
+    fig[F_BAKES] = omp_get_wtime() - t0;
+    sg_bake_frame_desc fd = {.camera = vc.camera, .width = z.image, .height = z.image};
+    double secs;
+    st = sg_bake_render(b, w, &fd, &frame, &secs, err);
+    if (st != SG_OK)
+        goto done;
+    char name[128];
+    snprintf(name, sizeof name, "stability_%s_%s%s", vc.name, model_name(model), c->d.ci ? "_ci" : "");
+    sg_image_metrics m;
+    st = sg_verify__compare(c, &frame, &ref.mean, name, &m, err);
+    if (st != SG_OK)
+        goto done;
+    fig[F_RELMSE] = m.rel_mse;
+    fig[F_ENERGY] = m.energy_ratio_lum;
+    fig[F_P99] = m.p99_rel_error;
+    fig[F_BAKENAN] = (double)(m.nan_pixels + m.inf_pixels);
+    fig[F_REFNAN] = (double)m.ref_nonfinite_pixels;
+    fig[F_REFLUM] = 0.2126 * m.mean_b[0] + 0.7152 * m.mean_b[1] + 0.0722 * m.mean_b[2];
+    fig[F_BAKELUM] = 0.2126 * m.mean_a[0] + 0.7152 * m.mean_a[1] + 0.0722 * m.mean_a[2];
+done:
+    sg_image_free(&frame);
+    sg_ref_result_free(&ref);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+    sg_verify_case_free(&vc);
+    return st;
+}
+
+/* In the child: run, write the figures (or the error) to path, exit. */
+static void child_main(const vctx *c, int ci, sg_surface_model model, const char *path)
+{
+    double fig[NFIG];
+    for (int i = 0; i < NFIG; i++)
+        fig[i] = NAN;
+    sg_error err = {0};
+    sg_status st = run_case(c, ci, model, fig, &err);
+    char tmp[4400];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "w");
+    if (f) {
+        if (st == SG_OK)
+            for (int i = 0; i < NFIG; i++)
+                fprintf(f, "%.9g\n", fig[i]);
+        else
+            fprintf(f, "error %s\n", err.message);
+        if (fclose(f) == 0)
+            rename(tmp, path);
+    }
+    if (c->d.log)
+        fflush(c->d.log);
+    _exit(st == SG_OK ? 0 : 3);
+}
+
+typedef struct row {
+    char status[16];
+    double wall;
+    int have;              /* figures read                              */
+    double fig[NFIG];
+} row;
+
+static void run_child(const vctx *c, int ci, sg_surface_model model, row *r)
+{
+    char path[4300];
+    snprintf(path, sizeof path, "%s/row_%s_%s.txt", c->d.work_dir, sg_verify_case_name(ci), model_name(model));
+    remove(path);
+    memset(r, 0, sizeof *r);
+    if (c->d.log)
+        fflush(c->d.log);
+    fflush(stdout);
+    fflush(stderr);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    pid_t pid = fork();
+    if (pid < 0) {
+        snprintf(r->status, sizeof r->status, "error");
+        sg_verify__log(c, "  fork failed: %s\n", strerror(errno));
+        return;
+    }
+    if (pid == 0)
+        child_main(c, ci, model, path);
+    int wstatus = 0, killed = 0;
+    for (;;) {
+        pid_t w = waitpid(pid, &wstatus, WNOHANG);
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        double el = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        if (w == pid)
+            break;
+        if (w < 0 && errno != EINTR)
+            break;
+        if (el > c->d.case_timeout_s && !killed) {
+            kill(pid, SIGKILL);
+            killed = 1;
+        }
+        struct timespec nap = {0, 20 * 1000 * 1000};
+        nanosleep(&nap, NULL);
+    }
+    r->wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    if (killed) {
+        snprintf(r->status, sizeof r->status, "timeout");
+        return;
+    }
+    if (WIFSIGNALED(wstatus)) {
+        snprintf(r->status, sizeof r->status, "crash");
+        sg_verify__log(c, "  %s/%s: killed by signal %d\n", sg_verify_case_name(ci), model_name(model),
+                       WTERMSIG(wstatus));
+        return;
+    }
+    FILE *f = fopen(path, "r");
+    char line[1200] = "";
+    if (!f) {
+        snprintf(r->status, sizeof r->status, "error");
+        return;
+    }
+    if (WEXITSTATUS(wstatus) != 0) {
+        if (fgets(line, sizeof line, f))
+            sg_verify__log(c, "  %s/%s: %s", sg_verify_case_name(ci), model_name(model), line);
+        fclose(f);
+        snprintf(r->status, sizeof r->status, "error");
+        return;
+    }
+    int n = 0;
+    while (n < NFIG && fgets(line, sizeof line, f))
+        r->fig[n++] = strtod(line, NULL);
+    fclose(f);
+    remove(path);
+    if (n != NFIG) {
+        snprintf(r->status, sizeof r->status, "error");
+        return;
+    }
+    r->have = 1;
+    int bad = r->fig[F_BAKENAN] > 0 || r->fig[F_REFNAN] > 0;
+    for (int i = 0; i < NFIG; i++)
+        if (!isfinite(r->fig[i]))
+            bad = 1;
+    snprintf(r->status, sizeof r->status, "%s", bad ? "nan" : "ok");
+}
+
+static void csv_num(vtable *t, int have, double v, const char *fmt)
+{
+    sg_verify__tprintf(t, ",");
+    if (have)
+        sg_verify__tprintf(t, fmt, v);
+}
+
+sg_status sg_verify__stability(vctx *c, sg_error *err)
+{
+    int n = sg_verify_case_count();
+    row *rows = calloc((size_t)n * 2, sizeof *rows);
+    if (!rows)
+        return sg_error_set(err, SG_ERR_NOMEM, "stability: out of memory");
+    if (!sg_verify__make_dirs(c->d.work_dir)) {
+        free(rows);
+        return sg_error_set(err, SG_ERR_IO, "%s: cannot create: %s", c->d.work_dir, strerror(errno));
+    }
+    sizes z = case_sizes(c);
+    sg_verify__log(c, "stability: %d cases x {mls, disk}; %dx%d, reference %d spp, bake %zu photons, direct %d; "
+                      "limit %.3g s per run\n",
+                   n, z.image, z.image, z.spp, z.photons, z.direct, c->d.case_timeout_s);
+    int run[64] = {0}; /* run[i]: case i selected (--case) */
+    if (n > 64) {
+        free(rows);
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "stability: %d cases, at most 64", n);
+    }
+    for (int i = 0; i < n; i++) {
+        run[i] = !c->d.only_case || strcmp(c->d.only_case, sg_verify_case_name(i)) == 0;
+        if (!run[i])
+            continue;
+        for (int m = 0; m < 2; m++) {
+            row *r = &rows[2 * i + m];
+            run_child(c, i, (sg_surface_model)m, r);
+            c->sum->cases_run++;
+            if (strcmp(r->status, "ok") != 0)
+                c->sum->flagged++;
+            if (r->have)
+                sg_verify__log(c,
+                               "  %-16s %-4s %-7s %5.1f s  holes %6.2f%%  normal %6.2f deg  bake relMSE %.4f energy "
+                               "%.4f  NaN %g/%g\n",
+                               sg_verify_case_name(i), model_name((sg_surface_model)m), r->status, r->wall,
+                               100 * r->fig[F_HOLE], r->fig[F_NORMAL], r->fig[F_RELMSE], r->fig[F_ENERGY],
+                               r->fig[F_BAKENAN], r->fig[F_REFNAN]);
+            else
+                sg_verify__log(c, "  %-16s %-4s %-7s %5.1f s\n", sg_verify_case_name(i),
+                               model_name((sg_surface_model)m), r->status, r->wall);
+        }
+    }
+    vtable t = {0};
+    sg_verify__tprintf(&t, "case,model,status,wall_s");
+    for (int k = 0; k < NFIG; k++)
+        sg_verify__tprintf(&t, ",%s", fig_names[k]);
+    sg_verify__tprintf(&t, ",ref_energy_vs_clean,baseline\n");
+    for (int i = 0; i < n; i++)
+        for (int m = 0; m < 2 && run[i]; m++) {
+            const row *r = &rows[2 * i + m];
+            sg_verify__tprintf(&t, "%s,%s,%s,%.3f", sg_verify_case_name(i), model_name((sg_surface_model)m),
+                               r->status, r->wall);
+            for (int k = 0; k < NFIG; k++)
+                csv_num(&t, r->have, r->fig[k], "%.6g");
+            int base = sg_verify_case_baseline(i);
+            const row *b = base >= 0 ? &rows[2 * base + m] : NULL;
+            int have = r->have && b && b->have && b->fig[F_REFLUM] > 0;
+            csv_num(&t, have, have ? r->fig[F_REFLUM] / b->fig[F_REFLUM] : 0, "%.6g");
+            sg_verify__tprintf(&t, ",%s\n", base >= 0 ? sg_verify_case_name(base) : "-");
+            t.rows++;
+        }
+    sg_status st = sg_verify__twrite(&t, c->d.out_dir, "stability.csv", err);
+    c->sum->rows += t.rows;
+    sg_verify__tfree(&t);
+
+    /* The Markdown map: one line per case, MLS and disks side by side. */
+    vtable md = {0};
+    sg_verify__tprintf(&md,
+                       "| case | status (mls / disk) | holes %% (mls / disk) | normal error deg | flipped %% | "
+                       "bake energy error %% | bake relMSE | NaN bake+ref | reference energy vs clean |\n"
+                       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < n; i++) {
+        if (!run[i])
+            continue;
+        const row *a = &rows[2 * i], *d = &rows[2 * i + 1];
+        char cell[8][80];
+        const row *rr[2] = {a, d};
+        double v[2][6];
+        for (int m = 0; m < 2; m++) {
+            const row *r = rr[m];
+            v[m][0] = 100 * r->fig[F_HOLE];
+            v[m][1] = r->fig[F_NORMAL];
+            v[m][2] = 100 * r->fig[F_FLIP];
+            v[m][3] = 100 * (r->fig[F_ENERGY] - 1);
+            v[m][4] = r->fig[F_RELMSE];
+            v[m][5] = r->fig[F_BAKENAN] + r->fig[F_REFNAN];
+        }
+        const char *fmt[6] = {"%.2f", "%.1f", "%.1f", "%+.1f", "%.4f", "%g"};
+        for (int k = 0; k < 6; k++) {
+            char x[2][32];
+            for (int m = 0; m < 2; m++)
+                if (rr[m]->have)
+                    snprintf(x[m], sizeof x[m], fmt[k], v[m][k]);
+                else
+                    snprintf(x[m], sizeof x[m], "–");
+            snprintf(cell[k], sizeof cell[k], "%s / %s", x[0], x[1]);
+        }
+        sg_verify__tprintf(&md, "| %s | %s / %s | %s | %s | %s | %s | %s | %s | ", sg_verify_case_name(i),
+                           a->status, d->status, cell[0], cell[1], cell[2], cell[3], cell[4], cell[5]);
+        int base = sg_verify_case_baseline(i);
+        for (int m = 0; m < 2; m++) {
+            const row *r = rr[m], *b = base >= 0 ? &rows[2 * base + m] : NULL;
+            if (r->have && b && b->have && b->fig[F_REFLUM] > 0)
+                sg_verify__tprintf(&md, "%.3f", r->fig[F_REFLUM] / b->fig[F_REFLUM]);
+            else
+                sg_verify__tprintf(&md, "–");
+            sg_verify__tprintf(&md, m == 0 ? " / " : " |\n");
+        }
+    }
+    if (st == SG_OK)
+        st = sg_verify__twrite(&md, c->d.out_dir, "stability.md", err);
+    sg_verify__tfree(&md);
+    free(rows);
+    return st;
+}

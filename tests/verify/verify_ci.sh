@@ -1,0 +1,99 @@
+#!/bin/sh
+# verify_ci.sh — the verification suite's CI sweep end to end: runs
+# splatgi-verify --ci (every stability case at tiny size under both surface
+# models, and small surface / bake / scaling / headline sweeps on the
+# built-in bunny), draws the charts, and checks that
+#   1. the program exits 0: no stability case flagged (NaN, timeout, crash);
+#   2. every CSV has exactly the expected header, every expected row once,
+#      and a finite number in every numeric field;
+#   3. every stability row's status is "ok" and its NaN counts are 0;
+#   4. the four charts exist, are non-empty and start with the PNG signature;
+#   5. a second run of one case reads its reference from the cache.
+# usage: verify_ci.sh SPLATGI_VERIFY VERIFY_CHARTS_SH WORKDIR
+# Exit 77 (ctest: skipped) when gnuplot is absent (scripts/setup.sh installs it).
+set -u
+VERIFY=$1 CHARTS=$2 DIR=$3
+fail() { echo "FAIL: $*" >&2; exit 1; }
+command -v gnuplot >/dev/null 2>&1 || { echo "gnuplot not found: skipped"; exit 77; }
+rm -rf "$DIR" && mkdir -p "$DIR" || exit 1
+OUT=$DIR/out
+"$VERIFY" --ci --out-dir "$OUT" --cache-dir "$DIR/cache" --work-dir "$DIR/work" > "$DIR/run.log" 2>&1
+rc=$?
+[ $rc -eq 0 ] || { cat "$DIR/run.log"; fail "splatgi-verify --ci exited $rc"; }
+bash "$CHARTS" "$OUT" > "$DIR/charts.log" 2>&1 || { cat "$DIR/charts.log"; fail "verify-charts.sh"; }
+
+# check_csv FILE HEADER TEXTCOLS [BLANKCOL]: header, then every field
+# numeric and finite except the 1-based columns listed in TEXTCOLS
+# (comma-separated) and BLANKCOL, which may be empty.
+check_csv() {
+  f=$1
+  [ -s "$f" ] || fail "$f missing or empty"
+  h=$(head -n 1 "$f")
+  [ "$h" = "$2" ] || fail "$f: header
+  got  $h
+  want $2"
+  awk -F, -v text="$3" -v blank="${4:-0}" -v f="$f" -v nh="$(echo "$2" | awk -F, '{ print NF }')" '
+    BEGIN { n = split(text, t, ","); for (i = 1; i <= n; i++) istext[t[i]] = 1 }
+    NR == 1 { next }
+    NF != nh { printf "%s line %d: %d fields, want %d\n", f, NR, NF, nh; bad = 1; next }
+    { for (i = 1; i <= NF; i++) {
+        if (i in istext) continue
+        if (i == blank && $i == "") continue
+        if ($i !~ /^[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$/) {
+          printf "%s line %d column %d: \"%s\" is not a finite number\n", f, NR, i, $i; bad = 1 } } }
+    END { exit bad }' "$f" || fail "$f: non-numeric or missing fields"
+}
+rows() { awk 'END { print NR - 1 }' "$1"; }
+
+# Stability: every case x {mls, disk}, once each, ok, no NaN.
+S=$OUT/stability.csv
+check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_noise_rel_mse,ref_energy_vs_clean,baseline" "1,2,3,24" 23
+ncase=0
+for c in $("$VERIFY" --list-cases); do
+  ncase=$((ncase + 1))
+  for m in mls disk; do
+    n=$(awk -F, -v c="$c" -v m="$m" '$1 == c && $2 == m' "$S" | wc -l)
+    [ "$n" -eq 1 ] || fail "stability.csv: $n rows for $c/$m, want 1"
+  done
+done
+[ "$ncase" -ge 11 ] || fail "only $ncase stability cases"
+[ "$(rows "$S")" -eq $((2 * ncase)) ] || fail "stability.csv: $(rows "$S") rows, want $((2 * ncase))"
+awk -F, 'NR > 1 && ($3 != "ok" || $14 != 0 || $15 != 0) { print "flagged: " $0; bad = 1 } END { exit bad }' "$S" ||
+  fail "stability cases flagged"
+awk -F, 'NR > 1 && $24 != "-" && $23 == "" { print "no energy against the clean twin: " $0; bad = 1 } END { exit bad }' "$S" ||
+  fail "missing baseline figures"
+[ -s "$OUT/stability.md" ] || fail "no stability.md"
+
+# Sweeps: the --ci plan (src/verify/sweeps.c): 4 surface configurations x
+# 2 renderers, 6 bakes, 2 sizes, 1 headline model.
+check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise" "1,2,7"
+[ "$(rows "$OUT/surfaces.csv")" -eq 8 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 8"
+for c in mls mls_no_refinements disk disk_r1.5; do
+  for r in bake_lookup direct; do
+    [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
+  done
+done
+check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise" "1"
+[ "$(rows "$OUT/bake.csv")" -eq 6 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 6"
+check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
+[ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
+check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise" "1"
+[ "$(awk -F, 'NR > 1 { print $1 }' "$OUT/headline.csv")" = "bunny" ] || fail "headline.csv: want one bunny row"
+[ -s "$OUT/headline.md" ] || fail "no headline.md"
+awk -F, 'FNR > 1 && $0 ~ /,nan,|,inf,/ { bad = 1 } END { exit bad }' "$OUT"/*.csv || fail "nan or inf in a CSV"
+
+# Charts.
+for p in verify_surfaces verify_bake verify_scaling verify_stability; do
+  f=$OUT/$p.png
+  [ -s "$f" ] || fail "$f missing or empty"
+  sig=$(od -An -tx1 -N8 "$f" | tr -d ' \n')
+  [ "$sig" = "89504e470d0a1a0a" ] || fail "$f: not a PNG (signature $sig)"
+done
+ls "$OUT"/diff/*.png > /dev/null 2>&1 || fail "no difference images"
+
+# The reference cache: a second run of one case renders nothing new.
+"$VERIFY" --ci --parts stability --case sphere_clean --out-dir "$DIR/again" --cache-dir "$DIR/cache" \
+  --work-dir "$DIR/work" > "$DIR/again.log" 2>&1 || { cat "$DIR/again.log"; fail "second run"; }
+awk -F, 'NR > 1 && $20 != 1 { bad = 1 } END { exit bad || NR != 3 }' "$DIR/again/stability.csv" ||
+  fail "second run did not use the cached reference"
+echo "verify CI sweep: $ncase stability cases x 2 models ok, CSV complete, charts drawn"
