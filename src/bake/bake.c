@@ -34,6 +34,7 @@
 #include "bake/glossy.h"
 #include "bake/samples.h"
 #include "core/alloc.h"
+#include "envmap/irradiance_table.h"
 
 static const float INV_PI = 0.318309886183791f;
 
@@ -116,6 +117,7 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *desc)
     fnv_u64(&h, sp_bits);
     fnv_u64(&h, (uint64_t)(int64_t)d.glossy_res);
     fnv_u64(&h, (uint64_t)(int64_t)d.glossy_rays);
+    fnv_u64(&h, SG_BAKE_ALGORITHM); /* same parameters, other estimator: other values */
     return h ? h : 1; /* 0 means "do not check" to bake_file.h */
 }
 
@@ -226,13 +228,36 @@ void sg_bake__glossy(sg_bake *b, uint32_t m, uint32_t **splat, uint32_t **neares
 
 /* Sample points of model m and the direct light interpolated from them,
  * added to E; *set keeps the points (every splat when s0 <= 0). */
-static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uint32_t m, uint64_t key_base,
-                                   float s0, float *E, sg_sample_set *set, sg_error *err)
+/* Direct light at sample points as a visibility ratio: rho = E / E_u per
+ * channel, E_u the unshadowed estimate over the same samples
+ * (sg_direct_irradiance_at), so rho is exactly 1 wherever nothing blocks
+ * the light, however noisy E itself is under a real map. Each splat then
+ * gets the interpolated rho times the unshadowed irradiance at its own
+ * normal from the table (irradiance_table.h): the normal's cosine is
+ * applied exactly, not averaged across a curved surface. A channel with no
+ * sampled light takes the luminance ratio, and a sample with none at all
+ * rho = 1 (the table says how little light there is). Samples [from, to). */
+static void direct_to_ratio(size_t from, size_t to, const float *unshadowed, float *vals)
+{
+    for (size_t j = from; j < to; ++j) {
+        const float *u = unshadowed + 3 * j;
+        float *v = vals + 3 * j;
+        float lu = 0.2126f * u[0] + 0.7152f * u[1] + 0.0722f * u[2];
+        float lv = 0.2126f * v[0] + 0.7152f * v[1] + 0.0722f * v[2];
+        float fallback = lu > 0.0f ? lv / lu : 1.0f;
+        for (int c = 0; c < 3; ++c)
+            v[c] = u[c] > 0.0f ? v[c] / u[c] : fallback;
+    }
+}
+
+static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, const sg_irradiance_table *e0,
+                                   uint32_t m, uint64_t key_base, float s0, float *E, sg_sample_set *set,
+                                   sg_error *err)
 {
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, m));
     int direct = d->direct_samples > 0;
     uint64_t seed = d->photons.seed ^ 0xD1EC7ull;
-    float *vals = NULL, *sig = NULL, *D = NULL;
+    float *vals = NULL, *sig = NULL, *unsh = NULL, *D = NULL;
     sg_status st = SG_OK;
     if (!(s0 > 0.0f)) { /* every splat a sample point: no interpolation */
         if (!(set->splat = sg_alloc_array(ps->count, sizeof *set->splat)) ||
@@ -245,7 +270,7 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
             return SG_OK;
         if (!(D = sg_alloc_array(3 * ps->count, sizeof *D)))
             return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the direct light");
-        st = sg_direct_irradiance_at(w, m, NULL, 0, key_base, d->direct_samples, seed, d->gather.threads, D, NULL,
+        st = sg_direct_irradiance_at(w, m, NULL, 0, key_base, d->direct_samples, seed, d->gather.threads, D, NULL, NULL,
                                      err);
         if (st == SG_OK)
             for (size_t i = 0; i < 3 * ps->count; ++i)
@@ -258,18 +283,22 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
         return st;
     size_t done = 0;
     for (int level = 0;; ++level) {
-        void *grown = vals, *grown_sig = sig;
+        void *grown = vals, *grown_sig = sig, *grown_unsh = unsh;
         int ok = sg_realloc_array(&grown, 3 * done, 3 * set->count, sizeof *vals);
         vals = grown;
         ok = ok && sg_realloc_array(&grown_sig, done, set->count, sizeof *sig);
         sig = grown_sig;
+        ok = ok && sg_realloc_array(&grown_unsh, 3 * done, 3 * set->count, sizeof *unsh);
+        unsh = grown_unsh;
         if (!ok) {
             st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the direct light");
             goto done;
         }
         if ((st = sg_direct_irradiance_at(w, m, set->splat + done, set->count - done, key_base, d->direct_samples,
-                                          seed, d->gather.threads, vals + 3 * done, sig + done, err)) != SG_OK)
+                                          seed, d->gather.threads, vals + 3 * done, unsh + 3 * done, sig + done,
+                                          err)) != SG_OK)
             goto done;
+        direct_to_ratio(done, set->count, unsh, vals);
         done = set->count;
         size_t added = 0;
         if (level >= REFINE_LEVELS ||
@@ -286,11 +315,16 @@ static sg_status direct_at_samples(const sg_world *w, const sg_bake_desc *d, uin
     }
     st = sg_samples_interpolate(ps, set, s0, SUPPORT, cosn, vals, d->gather.threads, D, err);
     if (st == SG_OK)
-        for (size_t i = 0; i < 3 * ps->count; ++i)
-            E[i] += D[i];
+        for (size_t i = 0; i < ps->count; ++i) {
+            sg_vec3 e = sg_irradiance_table_eval(e0, sg_pointset_normal(ps, i));
+            E[3 * i] += D[3 * i] * e.x;
+            E[3 * i + 1] += D[3 * i + 1] * e.y;
+            E[3 * i + 2] += D[3 * i + 2] * e.z;
+        }
 done:
     sg_free(vals);
     sg_free(sig);
+    sg_free(unsh);
     sg_free(D);
     return st;
 }
@@ -315,6 +349,7 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
     b->desc.photons.progress = NULL;
     b->desc.photons.progress_user = NULL;
     sg_sample_set *sets = NULL;
+    sg_irradiance_table *e0 = NULL; /* unshadowed irradiance, sparse direct light only */
     sg_status st = SG_OK;
     float **E = NULL;
     if (!alloc_model_arrays(b) || !(sets = sg_calloc_array(b->models, sizeof *sets))) {
@@ -330,6 +365,11 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
         b->E[m] = E[m];
     sg_free(E);
     double t1 = omp_get_wtime();
+    if (d.direct_samples > 0 && d.sample_spacing >= 0.0f) {
+        sg_irradiance_table_desc td = {.threads = d.gather.threads};
+        if ((st = sg_irradiance_table_create(sg_world_envmap(w), &td, &e0, err)) != SG_OK)
+            goto fail;
+    }
     uint64_t key_base = 0; /* splats of the models before m: random streams */
     for (size_t m = 0; m < b->models; ++m) {
         const sg_pointset *ps = sg_scene_points(sg_world_scene(w, (uint32_t)m));
@@ -345,7 +385,7 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
                 goto fail;
             s0 = (d.sample_spacing > 0.0f ? d.sample_spacing : sg_samples_default_spacing(mat)) * med;
         }
-        if ((st = direct_at_samples(w, &d, (uint32_t)m, key_base, s0, b->E[m], &sets[m], err)) != SG_OK)
+        if ((st = direct_at_samples(w, &d, e0, (uint32_t)m, key_base, s0, b->E[m], &sets[m], err)) != SG_OK)
             goto fail;
         b->samples[m] = sets[m].count;
         int res = sg_glossy_material(mat) ? (d.glossy_res ? d.glossy_res : sg_glossy_default_res(mat)) : 0;
@@ -385,12 +425,14 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
     b->stats.models = b->models;
     update_memory_stats(b);
     sg_free(sets);
+    sg_irradiance_table_destroy(e0);
     *out = b;
     return SG_OK;
 fail:
     for (size_t m = 0; sets && m < b->models; ++m)
         sg_sample_set_free(&sets[m]);
     sg_free(sets);
+    sg_irradiance_table_destroy(e0);
     sg_bake_destroy(b);
     return st;
 }

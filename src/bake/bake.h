@@ -112,10 +112,18 @@ sg_bake_desc sg_bake_get_desc(const sg_bake *b);
 /* 64-bit FNV-1a of the parameters that change a bake's values: photon
  * count, seed, max depth, Russian roulette depth, k, normal_cos,
  * SG_PHOTON_BLOCK, direct samples, sample spacing (float bits), glossy
- * resolution and rays, after defaults (so spelling a default out changes
- * nothing), as little-endian u64 (normal_cos: its float bits). Threads and
- * progress do not count: results ignore them. Never 0. */
+ * resolution and rays, and SG_BAKE_ALGORITHM, after defaults (so spelling
+ * a default out changes nothing), as little-endian u64 (normal_cos: its
+ * float bits). Threads and progress do not count: results ignore them.
+ * Never 0. */
 uint64_t sg_bake_param_hash(const sg_bake_desc *d);
+
+/* Version of the estimators behind a bake's values; raised whenever the
+ * same parameters start giving other values, so that a bake file made by
+ * an older splatgi counts as made with other parameters (and
+ * splatgi-bake --if-stale bakes again). 2: sparse direct light as a
+ * visibility ratio times the tabulated unshadowed irradiance. */
+#define SG_BAKE_ALGORITHM 2u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

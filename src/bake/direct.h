@@ -31,9 +31,15 @@
  * sigma (NULL: not wanted): per listed splat, the standard error of the
  * estimate's luminance (0.2126 R + 0.7152 G + 0.0722 B), from the spread
  * of the per-sample terms: what the refinement of the sample points
- * (samples.h) tells apart from a real change of the light. */
+ * (samples.h) tells apart from a real change of the light.
+ * unshadowed (NULL: not wanted): per listed splat, RGB, the same estimator
+ * over the same samples with the visibility left out, so that out /
+ * unshadowed is a ratio estimate of how much of the light arriving at
+ * the splat gets through (1 exactly where nothing blocks it, whatever the
+ * map's noise). With unshadowed given, sigma is the standard error of that
+ * ratio's luminance (delta method) instead of the estimate's. */
 sg_status sg_direct_irradiance_at(const sg_world *w, uint32_t m, const uint32_t *splats, size_t n,
                                   uint64_t key_base, int samples, uint64_t seed, int threads, float *out,
-                                  float *sigma, sg_error *err);
+                                  float *unshadowed, float *sigma, sg_error *err);
 
 #endif
