@@ -25,6 +25,10 @@
 #include "surface/disk.h"
 #include "surface/mls.h"
 
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+
 enum { STACK_SIZE = 128 };
 
 struct sg_scene {
@@ -193,7 +197,41 @@ void sg_scene_destroy(sg_scene *sc)
     sg_free(sc);
 }
 
-int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+/* Adds splat reference i to the weights kept so far (the exact
+ * arithmetic of the lookup: every caller gets the same bits). */
+static inline void hit_weights_add(const sg_scene *sc, const sg_hit *hit, size_t i, uint32_t *ids, float *weights,
+                                   int max, int *n, float *total)
+{
+    const sg_splat_soa *s = &sc->soa;
+    float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
+    float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
+    if (w <= 0.0f)
+        return;
+    *total += w;
+    if (*n < max) {
+        ids[*n] = s->id[i];
+        weights[(*n)++] = w;
+        return;
+    }
+    /* Full: replace the smallest weight kept. */
+    int k = 0;
+    for (int j = 1; j < *n; ++j)
+        if (weights[j] < weights[k])
+            k = j;
+    if (w > weights[k]) {
+        ids[k] = s->id[i];
+        weights[k] = w;
+    }
+}
+
+/* A splat passes the pre-filter when (d / r)^2 < HIT_WEIGHTS_SLACK: the
+ * kernel is zero from d / r >= 1 on (sg_mls_kernel), and the filter's
+ * squared ratio (no sqrt, maybe fused) is within a few ulps of the exact
+ * one, so 1e-4 of slack keeps every splat the exact test would keep. */
+static const float HIT_WEIGHTS_SLACK = 1.0001f;
+
+/* prefilter 0: the scalar reference, every splat of the leaf weighed. */
+static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max, int prefilter)
 {
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
@@ -201,27 +239,32 @@ int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, f
     float total = 0.0f;
     if (hit->leaf < sc->tree.leaf_count) {
         const sg_splat_soa *s = &sc->soa;
-        size_t first = sc->tree.leaf_first[hit->leaf], end = sc->tree.leaf_first[hit->leaf + 1];
-        for (size_t i = first; i < end; ++i) {
+        size_t i = sc->tree.leaf_first[hit->leaf], end = sc->tree.leaf_first[hit->leaf + 1];
+        /* Most of a leaf's splats do not reach the hit: find the ones that
+         * may with a cheap test on 8 at a time (squared distances, no sqrt
+         * or kernel), then weigh those exactly, in leaf order as before. */
+#if defined(__AVX2__) && defined(__FMA__)
+        const __m256 hx = _mm256_set1_ps(hit->p.x), hy = _mm256_set1_ps(hit->p.y), hz = _mm256_set1_ps(hit->p.z);
+        const __m256 slack = _mm256_set1_ps(HIT_WEIGHTS_SLACK);
+        for (; prefilter && i + 8 <= end; i += 8) {
+            __m256 dx = _mm256_sub_ps(hx, _mm256_loadu_ps(s->px + i));
+            __m256 dy = _mm256_sub_ps(hy, _mm256_loadu_ps(s->py + i));
+            __m256 dz = _mm256_sub_ps(hz, _mm256_loadu_ps(s->pz + i));
+            __m256 ir = _mm256_loadu_ps(s->inv_r + i);
+            __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+            __m256 s2 = _mm256_mul_ps(_mm256_mul_ps(d2, ir), ir);
+            unsigned bits = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(s2, slack, _CMP_LT_OQ));
+            while (bits) {
+                int l = __builtin_ctz(bits);
+                bits &= bits - 1;
+                hit_weights_add(sc, hit, i + (size_t)l, ids, weights, max, &n, &total);
+            }
+        }
+#endif
+        for (; i < end; ++i) {
             float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
-            float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
-            if (w <= 0.0f)
-                continue;
-            total += w;
-            if (n < max) {
-                ids[n] = s->id[i];
-                weights[n++] = w;
-                continue;
-            }
-            /* Full: replace the smallest weight kept. */
-            int k = 0;
-            for (int j = 1; j < n; ++j)
-                if (weights[j] < weights[k])
-                    k = j;
-            if (w > weights[k]) {
-                ids[k] = s->id[i];
-                weights[k] = w;
-            }
+            if (!prefilter || (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i] < HIT_WEIGHTS_SLACK)
+                hit_weights_add(sc, hit, i, ids, weights, max, &n, &total);
         }
     }
     if (n == 0 || !(total > 0.0f)) {
@@ -235,6 +278,16 @@ int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, f
     for (int j = 0; j < n; ++j)
         weights[j] /= kept;
     return n;
+}
+
+int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    return hit_weights(sc, hit, ids, weights, max, 1);
+}
+
+int sg_scene_hit_weights_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    return hit_weights(sc, hit, ids, weights, max, 0);
 }
 
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
@@ -398,6 +451,176 @@ done:
     st.hits = (uint64_t)found;
     if (stats)
         sg_ray_stats_add(stats, &st);
+    return found;
+}
+
+/* ---- four rays at once (primary-ray quads) ---------------------------------
+ *
+ * traverse4 walks the tree once for up to four rays that share the origin
+ * and the sign of each direction component, so that every inner node has
+ * one near child for all of them. Each ray keeps its own interval, decides
+ * at each node exactly as traverse() does (same arithmetic, same tests)
+ * whether it needs the near child, the far one or both, and is carried
+ * into a child only when it needs it: each ray meets the same leaves, in
+ * the same order, with the same intervals and carries as when traced
+ * alone, so the hits are the same bits. What the rays share is the node
+ * and leaf fetches, the stack and the control flow. MLS only: the disk
+ * blend window is per ray and ends traversal per ray (traverse()). */
+
+typedef struct stack_entry4 {
+    uint32_t node;
+    unsigned mask;   /* rays that need this subtree      */
+    float t0[4], t1[4];
+} stack_entry4;
+
+static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask, sg_hit *hits, sg_ray_stats *stats)
+{
+    sg_ray_stats st = {0};
+    float inv[4][3], t0[4], t1[4];
+    sg_mls_carry carry[4];
+    unsigned found = 0;
+    const float org[3] = {rays[0].org.x, rays[0].org.y, rays[0].org.z};
+    const sg_kd_node *nodes = sc->tree.nodes;
+    const uint32_t *leaf_first = sc->tree.leaf_first;
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        st.rays++;
+        inv[r][0] = 1.0f / rays[r].dir.x;
+        inv[r][1] = 1.0f / rays[r].dir.y;
+        inv[r][2] = 1.0f / rays[r].dir.z;
+        carry[r].valid = 0;
+        if (!clip_root(&sc->tree.bounds, &rays[r], inv[r], &t0[r], &t1[r]))
+            mask &= ~(1u << r);
+    }
+    stack_entry4 stack[STACK_SIZE];
+    int sp = 0;
+    uint32_t ni = 0;
+    while (mask) {
+        sg_kd_node n = nodes[ni];
+        st.nodes += (uint64_t)__builtin_popcount(mask);
+        while (!sg_kd_node_is_leaf(n)) {
+            int a = sg_kd_node_axis(n);
+            uint32_t child = sg_kd_node_index(n);
+            int r0 = __builtin_ctz(mask);
+            /* Shared origin and direction signs: one near side for all. */
+            int below = org[a] < n.split || (org[a] == n.split && inv[r0][a] <= 0.0f);
+            uint32_t first = below ? child : child + 1, second = below ? child + 1 : child;
+            unsigned need_first = 0, need_second = 0;
+            float s0[4], s1[4]; /* the far child's intervals */
+            for (unsigned m = mask; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                float ts = (n.split - org[a]) * inv[r][a];
+                if (!(ts == ts) || ts > t1[r] || ts <= 0.0f) {
+                    need_first |= 1u << r;
+                } else if (ts < t0[r]) {
+                    need_second |= 1u << r;
+                } else {
+                    need_first |= 1u << r;
+                    need_second |= 1u << r;
+                    s0[r] = ts;
+                    s1[r] = t1[r];
+                    t1[r] = ts;
+                    continue;
+                }
+                s0[r] = t0[r];
+                s1[r] = t1[r];
+            }
+            if (!need_first) {
+                ni = second;
+                mask = need_second;
+                for (unsigned m = mask; m; m &= m - 1) {
+                    int r = __builtin_ctz(m);
+                    t0[r] = s0[r];
+                    t1[r] = s1[r];
+                }
+            } else {
+                if (need_second) {
+                    assert(sp < STACK_SIZE);
+                    stack_entry4 *e = &stack[sp++];
+                    e->node = second;
+                    e->mask = need_second;
+                    memcpy(e->t0, s0, sizeof s0);
+                    memcpy(e->t1, s1, sizeof s1);
+                }
+                ni = first;
+                mask = need_first;
+            }
+            n = nodes[ni];
+            st.nodes += (uint64_t)__builtin_popcount(mask);
+        }
+        uint32_t l = sg_kd_node_index(n);
+        size_t lf = leaf_first[l], lc_leaf = leaf_first[l + 1] - lf;
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            size_t lc = lc_leaf;
+            st.leaves++;
+            float c0 = t0[r], c1 = t1[r];
+            if (lc && !clip_box(&sc->tree.leaf_bounds[l], org, inv[r], &c0, &c1))
+                lc = 0;
+            if (!lc) {
+                carry[r].valid = 0;
+                continue;
+            }
+            st.isects++;
+            st.splats += lc;
+            sg_hit h;
+            if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, &rays[r], c0, c1, &h, &carry[r])) {
+                h.leaf = l;
+                hits[r] = h;
+                found |= 1u << r;
+            }
+        }
+        /* Pop the next subtree some unfinished ray needs. */
+        mask = 0;
+        while (sp > 0 && !mask) {
+            --sp;
+            mask = stack[sp].mask & ~found;
+            ni = stack[sp].node;
+            for (unsigned m = mask; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                t0[r] = stack[sp].t0[r];
+                t1[r] = stack[sp].t1[r];
+            }
+        }
+    }
+    st.hits = (uint64_t)__builtin_popcount(found);
+    if (stats)
+        sg_ray_stats_add(stats, &st);
+    return found;
+}
+
+/* Whether the rays of mask can share traverse4: same origin bits, same
+ * sign bit of each direction component. */
+static int can_share(const sg_ray *rays, unsigned mask)
+{
+    int r0 = __builtin_ctz(mask);
+    for (unsigned m = mask & (mask - 1); m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (memcmp(&rays[r].org, &rays[r0].org, sizeof rays[r0].org) != 0 ||
+            signbit(rays[r].dir.x) != signbit(rays[r0].dir.x) || signbit(rays[r].dir.y) != signbit(rays[r0].dir.y) ||
+            signbit(rays[r].dir.z) != signbit(rays[r0].dir.z))
+            return 0;
+    }
+    return 1;
+}
+
+unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
+                             sg_ray_stats *stats)
+{
+    mask &= 15u;
+    unsigned found = 0;
+    if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
+        found = traverse4(sc, rays, mask, hits, stats);
+    } else {
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (traverse(sc, &rays[r], &hits[r], stats, QUERY_NEAREST))
+                found |= 1u << r;
+        }
+    }
+    for (unsigned m = mask & ~found; m; m &= m - 1)
+        hits[__builtin_ctz(m)].splat = SG_INVALID_ID;
     return found;
 }
 
