@@ -15,8 +15,9 @@
  *   bake     sg_bake_render (the frame as bake.c makes it);
  *   view     sg_view_render (view/render.h; the viewer's frame);
  *   display  sg_display_apply of the frame to RGBA8;
- * and the mean per phase is printed, with the load average before and
- * after, and the largest difference between the bake's and the view's
+ * and the mean per phase is printed (wall time, and the process's CPU
+ * time over all threads, which other processes' load does not inflate),
+ * with the load average before and after, and the largest difference between the bake's and the view's
  * images (relative, per channel).
  */
 #include <math.h>
@@ -24,6 +25,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "bake/bake.h"
@@ -36,6 +38,16 @@
 #include "view/render.h"
 
 enum { TILE = 16, LOOKUP = 32 };
+
+/* CPU seconds of this process (all threads): unlike wall time, it does
+ * not count the time other processes hold the cores, so A/B ratios stay
+ * meaningful on a loaded machine. */
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static double load1(void)
 {
@@ -135,7 +147,7 @@ int main(int argc, char **argv)
     uint8_t *rgba = malloc((size_t)width * (size_t)height * 4);
     enum { ISECT, WEIGHTS, WEIGHTS_REF, BAKE, VIEW, DISPLAY, PHASES };
     static const char *const name[PHASES] = {"isect", "weights", "weights_ref", "bake", "view", "display"};
-    double sum[PHASES] = {0}, sink = 0.0, maxrel = 0.0;
+    double sum[PHASES] = {0}, cpu[PHASES] = {0}, sink = 0.0, maxrel = 0.0, c0;
     size_t differ = 0;
     sg_ray_stats rs = {0};
     int frames = 0;
@@ -149,24 +161,31 @@ int main(int argc, char **argv)
         double s;
         /* Alternate which renderer goes first, so neither always gets the warmer cache. */
         for (int pass = 0; pass < 2; ++pass) {
+            c0 = cpu_now();
             if ((pass == 0) == (k / (size_t)stride % 2 == 0)) {
                 if (sg_bake_render(b, w, &fd, &ib, &s, &err) != SG_OK)
                     return fprintf(stderr, "%s\n", err.message), 1;
                 sum[BAKE] += s;
+                cpu[BAKE] += cpu_now() - c0;
             } else {
                 if (sg_view_render(b, w, &fd, &iv, &s, &err) != SG_OK)
                     return fprintf(stderr, "%s\n", err.message), 1;
                 sum[VIEW] += s;
+                cpu[VIEW] += cpu_now() - c0;
             }
         }
-        sum[ISECT] += primary_pass(w, &cam, width, height, threads, 0, &sink, NULL);
-        sum[WEIGHTS] += primary_pass(w, &cam, width, height, threads, 1, &sink, NULL);
-        sum[WEIGHTS_REF] += primary_pass(w, &cam, width, height, threads, 2, &sink, NULL);
+        for (int ph = ISECT; ph <= WEIGHTS_REF; ++ph) {
+            c0 = cpu_now();
+            sum[ph] += primary_pass(w, &cam, width, height, threads, ph - ISECT, &sink, NULL);
+            cpu[ph] += cpu_now() - c0;
+        }
         primary_pass(w, &cam, width, height, threads, 0, &sink, &rs);
         t0 = omp_get_wtime();
+        c0 = cpu_now();
         if (sg_display_apply(disp, &iv, rgba, &err) != SG_OK)
             return fprintf(stderr, "%s\n", err.message), 1;
         sum[DISPLAY] += omp_get_wtime() - t0;
+        cpu[DISPLAY] += cpu_now() - c0;
         for (size_t i = 0; i < (size_t)width * (size_t)height * 3; ++i) {
             double a = ib.data[i], v = iv.data[i];
             double rel = fabs(a - v) / fmax(fabs(a), 1e-6);
@@ -182,10 +201,13 @@ int main(int argc, char **argv)
     printf("%dx%d, %d frames (every %d-th key), %d threads, load %.2f -> %.2f\n", width, height, frames, stride,
            threads, l0, load1());
     for (int p = 0; p < PHASES; ++p)
-        printf("  %-11s %8.2f ms/frame\n", name[p], 1e3 * sum[p] / frames);
-    printf("  weights - isect = %.2f ms (scalar reference: %.2f ms); bake/view = %.3f\n",
-           1e3 * (sum[WEIGHTS] - sum[ISECT]) / frames, 1e3 * (sum[WEIGHTS_REF] - sum[ISECT]) / frames,
-           sum[BAKE] / sum[VIEW]);
+        printf("  %-11s %8.2f ms/frame wall, %8.2f ms/frame CPU (all threads)\n", name[p], 1e3 * sum[p] / frames,
+               1e3 * cpu[p] / frames);
+    printf("  weights - isect = %.2f ms wall, %.2f ms CPU (scalar reference: %.2f, %.2f); bake/view = %.3f wall, "
+           "%.3f CPU\n",
+           1e3 * (sum[WEIGHTS] - sum[ISECT]) / frames, 1e3 * (cpu[WEIGHTS] - cpu[ISECT]) / frames,
+           1e3 * (sum[WEIGHTS_REF] - sum[ISECT]) / frames, 1e3 * (cpu[WEIGHTS_REF] - cpu[ISECT]) / frames,
+           sum[BAKE] / sum[VIEW], cpu[BAKE] / cpu[VIEW]);
     printf("  view vs bake: %zu channel values differ, max relative difference %.3g (sink %g)\n", differ, maxrel,
            sink);
     double nr = (double)rs.rays;

@@ -301,6 +301,28 @@ static uint32_t dominant_splat(const actives *a, sg_kernel kernel, float t)
 {
     float wmax = 0.0f;
     uint32_t best = SG_INVALID_ID;
+#ifdef SG_MLS_AVX2
+    if (kernel == SG_KERNEL_HAT) {
+        /* The hat weights 8 at a time, with the scalar loop's operations
+         * (multiply, add, multiply, sqrt, subtract: no fused steps), so
+         * the same values; then the same first-largest scan. A weight
+         * outside the support is <= 0 (or NaN) and never beats wmax >= 0. */
+        float w[ACTIVE_CAP];
+        const __m256 vt = _mm256_set1_ps(t), one = _mm256_set1_ps(1.0f);
+        for (int j = 0; j < a->n; j += 8) {
+            __m256 dt = _mm256_sub_ps(vt, _mm256_loadu_ps(a->tc + j));
+            __m256 s2 = _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(dt, dt), _mm256_loadu_ps(a->perp2 + j)),
+                                      _mm256_loadu_ps(a->inv_r2 + j));
+            _mm256_storeu_ps(w + j, _mm256_sub_ps(one, _mm256_sqrt_ps(s2)));
+        }
+        for (int j = 0; j < a->n; ++j)
+            if (w[j] > wmax) {
+                wmax = w[j];
+                best = a->id[j];
+            }
+        return best;
+    }
+#endif
     for (int j = 0; j < a->n; ++j) {
         float dt = t - a->tc[j];
         float w = kernel_sq(kernel, (dt * dt + a->perp2[j]) * a->inv_r2[j]);

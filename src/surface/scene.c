@@ -28,6 +28,10 @@
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
 #endif
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#define SG_SCENE_TRAVERSE4 1 /* the quad traversal; else rays one by one */
+#endif
 
 enum { STACK_SIZE = 128 };
 
@@ -467,22 +471,24 @@ done:
  * and leaf fetches, the stack and the control flow. MLS only: the disk
  * blend window is per ray and ends traversal per ray (traverse()). */
 
+#ifdef SG_SCENE_TRAVERSE4
 typedef struct stack_entry4 {
+    __m128 t0, t1;   /* interval per ray (lane r: ray r)  */
     uint32_t node;
     unsigned mask;   /* rays that need this subtree      */
-    float t0[4], t1[4];
 } stack_entry4;
 
 static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask, sg_hit *hits, sg_ray_stats *stats)
 {
     sg_ray_stats st = {0};
-    float inv[4][3], t0[4], t1[4];
+    float inv[4][3], t0a[4] = {0, 0, 0, 0}, t1a[4] = {0, 0, 0, 0};
     sg_mls_carry carry[4];
     unsigned found = 0;
     const float org[3] = {rays[0].org.x, rays[0].org.y, rays[0].org.z};
     const sg_kd_node *nodes = sc->tree.nodes;
     const uint32_t *leaf_first = sc->tree.leaf_first;
     for (int r = 0; r < 4; ++r) {
+        inv[r][0] = inv[r][1] = inv[r][2] = 1.0f; /* lanes of rays outside mask: unused */
         if (!(mask >> r & 1u))
             continue;
         st.rays++;
@@ -490,9 +496,18 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
         inv[r][1] = 1.0f / rays[r].dir.y;
         inv[r][2] = 1.0f / rays[r].dir.z;
         carry[r].valid = 0;
-        if (!clip_root(&sc->tree.bounds, &rays[r], inv[r], &t0[r], &t1[r]))
+        if (!clip_root(&sc->tree.bounds, &rays[r], inv[r], &t0a[r], &t1a[r]))
             mask &= ~(1u << r);
     }
+    /* Per node, each ray's decision of traverse() in one lane: first only
+     * when ts is NaN, beyond t1 or <= 0; second only when ts < t0; else
+     * both, the near child's interval ending and the far one's starting
+     * at ts. Same operations per lane as traverse() per ray. */
+    const __m128 inv_v[3] = {_mm_setr_ps(inv[0][0], inv[1][0], inv[2][0], inv[3][0]),
+                             _mm_setr_ps(inv[0][1], inv[1][1], inv[2][1], inv[3][1]),
+                             _mm_setr_ps(inv[0][2], inv[1][2], inv[2][2], inv[3][2])};
+    const __m128 zero = _mm_setzero_ps();
+    __m128 t0 = _mm_loadu_ps(t0a), t1 = _mm_loadu_ps(t1a);
     stack_entry4 stack[STACK_SIZE];
     int sp = 0;
     uint32_t ni = 0;
@@ -506,42 +521,25 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
             /* Shared origin and direction signs: one near side for all. */
             int below = org[a] < n.split || (org[a] == n.split && inv[r0][a] <= 0.0f);
             uint32_t first = below ? child : child + 1, second = below ? child + 1 : child;
-            unsigned need_first = 0, need_second = 0;
-            float s0[4], s1[4]; /* the far child's intervals */
-            for (unsigned m = mask; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                float ts = (n.split - org[a]) * inv[r][a];
-                if (!(ts == ts) || ts > t1[r] || ts <= 0.0f) {
-                    need_first |= 1u << r;
-                } else if (ts < t0[r]) {
-                    need_second |= 1u << r;
-                } else {
-                    need_first |= 1u << r;
-                    need_second |= 1u << r;
-                    s0[r] = ts;
-                    s1[r] = t1[r];
-                    t1[r] = ts;
-                    continue;
-                }
-                s0[r] = t0[r];
-                s1[r] = t1[r];
-            }
+            __m128 ts = _mm_mul_ps(_mm_set1_ps(n.split - org[a]), inv_v[a]);
+            __m128 first_only = _mm_or_ps(_mm_cmpunord_ps(ts, ts),
+                                          _mm_or_ps(_mm_cmpgt_ps(ts, t1), _mm_cmple_ps(ts, zero)));
+            __m128 second_only = _mm_andnot_ps(first_only, _mm_cmplt_ps(ts, t0));
+            unsigned fo = (unsigned)_mm_movemask_ps(first_only), so = (unsigned)_mm_movemask_ps(second_only);
+            unsigned need_first = mask & ~so, need_second = mask & ~fo;
             if (!need_first) {
-                ni = second;
+                ni = second; /* every ray needs the far side alone: intervals stay */
                 mask = need_second;
-                for (unsigned m = mask; m; m &= m - 1) {
-                    int r = __builtin_ctz(m);
-                    t0[r] = s0[r];
-                    t1[r] = s1[r];
-                }
             } else {
                 if (need_second) {
+                    __m128 both = _mm_andnot_ps(_mm_or_ps(first_only, second_only), _mm_cmpeq_ps(zero, zero));
                     assert(sp < STACK_SIZE);
                     stack_entry4 *e = &stack[sp++];
                     e->node = second;
                     e->mask = need_second;
-                    memcpy(e->t0, s0, sizeof s0);
-                    memcpy(e->t1, s1, sizeof s1);
+                    e->t0 = _mm_blendv_ps(t0, ts, both);
+                    e->t1 = t1;
+                    t1 = _mm_blendv_ps(t1, ts, both);
                 }
                 ni = first;
                 mask = need_first;
@@ -551,11 +549,13 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
         }
         uint32_t l = sg_kd_node_index(n);
         size_t lf = leaf_first[l], lc_leaf = leaf_first[l + 1] - lf;
+        _mm_storeu_ps(t0a, t0);
+        _mm_storeu_ps(t1a, t1);
         for (unsigned m = mask; m; m &= m - 1) {
             int r = __builtin_ctz(m);
             size_t lc = lc_leaf;
             st.leaves++;
-            float c0 = t0[r], c1 = t1[r];
+            float c0 = t0a[r], c1 = t1a[r];
             if (lc && !clip_box(&sc->tree.leaf_bounds[l], org, inv[r], &c0, &c1))
                 lc = 0;
             if (!lc) {
@@ -577,11 +577,8 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
             --sp;
             mask = stack[sp].mask & ~found;
             ni = stack[sp].node;
-            for (unsigned m = mask; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                t0[r] = stack[sp].t0[r];
-                t1[r] = stack[sp].t1[r];
-            }
+            t0 = stack[sp].t0;
+            t1 = stack[sp].t1;
         }
     }
     st.hits = (uint64_t)__builtin_popcount(found);
@@ -589,6 +586,7 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
         sg_ray_stats_add(stats, &st);
     return found;
 }
+
 
 /* Whether the rays of mask can share traverse4: same origin bits, same
  * sign bit of each direction component. */
@@ -605,14 +603,19 @@ static int can_share(const sg_ray *rays, unsigned mask)
     return 1;
 }
 
+#endif
+
 unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                              sg_ray_stats *stats)
 {
     mask &= 15u;
     unsigned found = 0;
+#ifdef SG_SCENE_TRAVERSE4
     if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
         found = traverse4(sc, rays, mask, hits, stats);
-    } else {
+    } else
+#endif
+    {
         for (unsigned m = mask; m; m &= m - 1) {
             int r = __builtin_ctz(m);
             if (traverse(sc, &rays[r], &hits[r], stats, QUERY_NEAREST))
