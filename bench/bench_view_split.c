@@ -112,6 +112,9 @@ int main(int argc, char **argv)
     int width = argc > 5 ? atoi(argv[4]) : 512, height = argc > 5 ? atoi(argv[5]) : 512;
     int stride = argc > 6 ? atoi(argv[6]) : 1;
     int threads = argc > 7 ? atoi(argv[7]) : omp_get_max_threads();
+    /* SG_SPLIT_ONLY_VIEW=1: the viewer's frame alone (for profilers). */
+    const char *only_env = getenv("SG_SPLIT_ONLY_VIEW");
+    int only_view = only_env && *only_env == '1';
     if (width < 1 || height < 1 || stride < 1 || threads < 1)
         return fprintf(stderr, "bad size, stride or threads\n"), 2;
     sg_error err;
@@ -163,6 +166,8 @@ int main(int argc, char **argv)
         for (int pass = 0; pass < 2; ++pass) {
             c0 = cpu_now();
             if ((pass == 0) == (k / (size_t)stride % 2 == 0)) {
+                if (only_view)
+                    continue;
                 if (sg_bake_render(b, w, &fd, &ib, &s, &err) != SG_OK)
                     return fprintf(stderr, "%s\n", err.message), 1;
                 sum[BAKE] += s;
@@ -174,19 +179,20 @@ int main(int argc, char **argv)
                 cpu[VIEW] += cpu_now() - c0;
             }
         }
-        for (int ph = ISECT; ph <= WEIGHTS_REF; ++ph) {
+        for (int ph = ISECT; ph <= WEIGHTS_REF && !only_view; ++ph) {
             c0 = cpu_now();
             sum[ph] += primary_pass(w, &cam, width, height, threads, ph - ISECT, &sink, NULL);
             cpu[ph] += cpu_now() - c0;
         }
-        primary_pass(w, &cam, width, height, threads, 0, &sink, &rs);
+        if (!only_view)
+            primary_pass(w, &cam, width, height, threads, 0, &sink, &rs);
         t0 = omp_get_wtime();
         c0 = cpu_now();
         if (sg_display_apply(disp, &iv, rgba, &err) != SG_OK)
             return fprintf(stderr, "%s\n", err.message), 1;
         sum[DISPLAY] += omp_get_wtime() - t0;
         cpu[DISPLAY] += cpu_now() - c0;
-        for (size_t i = 0; i < (size_t)width * (size_t)height * 3; ++i) {
+        for (size_t i = 0; !only_view && i < (size_t)width * (size_t)height * 3; ++i) {
             double a = ib.data[i], v = iv.data[i];
             double rel = fabs(a - v) / fmax(fabs(a), 1e-6);
             if (a != v)

@@ -413,6 +413,53 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
                                                         perm));
         a->n = n + pc;
     }
+    if (i < end) {
+        /* The last 1..7 splats in one masked step (no load past the
+         * arrays' end) with the scalar loop's operations in its order
+         * (separate multiplies and adds, perp2 < 0 set to 0, the same
+         * rejection tests), so each splat gets the values it would get
+         * there, bit for bit. */
+        const __m256i lane = _mm256_cmpgt_epi32(_mm256_set1_epi32((int)(end - i)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        __m256 qx = _mm256_sub_ps(_mm256_maskload_ps(s->px + i, lane), ox);
+        __m256 qy = _mm256_sub_ps(_mm256_maskload_ps(s->py + i, lane), oy);
+        __m256 qz = _mm256_sub_ps(_mm256_maskload_ps(s->pz + i, lane), oz);
+        __m256 tc = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, dx), _mm256_mul_ps(qy, dy)), _mm256_mul_ps(qz, dz));
+        __m256 q2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, qx), _mm256_mul_ps(qy, qy)), _mm256_mul_ps(qz, qz));
+        __m256 perp2 = _mm256_sub_ps(q2, _mm256_mul_ps(tc, tc));
+        perp2 = _mm256_blendv_ps(perp2, zero, _mm256_cmp_ps(perp2, zero, _CMP_LT_OQ));
+        __m256 r = _mm256_maskload_ps(s->r + i, lane);
+        __m256 r2 = _mm256_mul_ps(r, r);
+        __m256 inside = _mm256_and_ps(_mm256_cmp_ps(perp2, r2, _CMP_LT_OQ), _mm256_castsi256_ps(lane));
+        __m256 h = _mm256_sqrt_ps(_mm256_sub_ps(r2, perp2));
+        __m256 lo = _mm256_sub_ps(tc, h), hi = _mm256_add_ps(tc, h);
+        __m256 reject = _mm256_or_ps(_mm256_cmp_ps(hi, vt0, _CMP_LT_OQ), _mm256_cmp_ps(lo, vt1, _CMP_GT_OQ));
+        __m256 m = _mm256_andnot_ps(reject, inside);
+        int bits = _mm256_movemask_ps(m);
+        if (bits) {
+            vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
+            vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
+            vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
+            int n = a->n, pc = __builtin_popcount((unsigned)bits);
+            if (n + pc > MAX_ACTIVE)
+                return -1;
+            const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
+            __m256 ir = _mm256_maskload_ps(s->inv_r + i, lane);
+            _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
+            _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
+            _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
+            _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
+            _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
+            _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(ir, ir), perm));
+            _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nx + i, lane), perm));
+            _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->ny + i, lane), perm));
+            _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nz + i, lane), perm));
+            _mm256_storeu_si256((__m256i *)(void *)(a->id + n),
+                                _mm256_permutevar8x32_epi32(_mm256_maskload_epi32((const int *)(const void *)(s->id + i), lane),
+                                                            perm));
+            a->n = n + pc;
+        }
+        i = end;
+    }
     {
         float tmp[8];
         _mm256_storeu_ps(tmp, vlo);
