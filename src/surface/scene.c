@@ -203,14 +203,10 @@ void sg_scene_destroy(sg_scene *sc)
 
 /* Adds splat reference i to the weights kept so far (the exact
  * arithmetic of the lookup: every caller gets the same bits). */
-static inline void hit_weights_add(const sg_scene *sc, const sg_hit *hit, size_t i, uint32_t *ids, float *weights,
-                                   int max, int *n, float *total)
+/* Keeps weight w > 0 of splat reference i among the largest max. */
+static inline void hit_weights_keep(const sg_splat_soa *s, size_t i, float w, uint32_t *ids, float *weights, int max,
+                                    int *n, float *total)
 {
-    const sg_splat_soa *s = &sc->soa;
-    float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
-    float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
-    if (w <= 0.0f)
-        return;
     *total += w;
     if (*n < max) {
         ids[*n] = s->id[i];
@@ -226,6 +222,18 @@ static inline void hit_weights_add(const sg_scene *sc, const sg_hit *hit, size_t
         ids[k] = s->id[i];
         weights[k] = w;
     }
+}
+
+/* Adds splat reference i to the weights kept so far (the exact
+ * arithmetic of the lookup: every caller gets the same bits). */
+static inline void hit_weights_add(const sg_scene *sc, const sg_hit *hit, size_t i, uint32_t *ids, float *weights,
+                                   int max, int *n, float *total)
+{
+    const sg_splat_soa *s = &sc->soa;
+    float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
+    float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
+    if (w > 0.0f)
+        hit_weights_keep(s, i, w, ids, weights, max, n, total);
 }
 
 /* A splat passes the pre-filter when (d / r)^2 < HIT_WEIGHTS_SLACK: the
@@ -255,6 +263,27 @@ static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, flo
             __m256 dy = _mm256_sub_ps(hy, _mm256_loadu_ps(s->py + i));
             __m256 dz = _mm256_sub_ps(hz, _mm256_loadu_ps(s->pz + i));
             __m256 ir = _mm256_loadu_ps(s->inv_r + i);
+            if (sc->desc.kernel == SG_KERNEL_HAT) {
+                /* The exact weights 8 at a time: the scalar expression's
+                 * operations in its order (no fused steps), so the same
+                 * bits; w = 1 - s inside the support, else 0. */
+                __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                          _mm256_mul_ps(dz, dz));
+                __m256 sr = _mm256_mul_ps(_mm256_sqrt_ps(d2), ir);
+                __m256 inside = _mm256_cmp_ps(sr, _mm256_set1_ps(1.0f), _CMP_LT_OQ);
+                __m256 w = _mm256_and_ps(inside, _mm256_sub_ps(_mm256_set1_ps(1.0f), sr));
+                unsigned bits = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(w, _mm256_setzero_ps(), _CMP_GT_OQ));
+                if (!bits)
+                    continue;
+                float wl[8];
+                _mm256_storeu_ps(wl, w);
+                while (bits) {
+                    int l = __builtin_ctz(bits);
+                    bits &= bits - 1;
+                    hit_weights_keep(s, i + (size_t)l, wl[l], ids, weights, max, &n, &total);
+                }
+                continue;
+            }
             __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
             __m256 s2 = _mm256_mul_ps(_mm256_mul_ps(d2, ir), ir);
             unsigned bits = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(s2, slack, _CMP_LT_OQ));
