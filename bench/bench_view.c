@@ -530,6 +530,19 @@ static void write_md(FILE *f, const void *ctx)
                 1e3 * o->threads / b->cpu_ms, o->threads);
     if (!a && !b)
         fputs("- not measured (no 1000000-point run).\n", f);
+    /* The frame's profile split is measured by bench_view_split and kept
+     * in OUT_DIR/bench_view_split.md; shown here when present. */
+    char split[4200];
+    snprintf(split, sizeof split, "%s/bench_view_split.md", o->out_dir);
+    FILE *sf = fopen(split, "r");
+    if (sf) {
+        char buf[4096];
+        size_t n;
+        fputs("\n", f);
+        while ((n = fread(buf, 1, sizeof buf, sf)) > 0)
+            fwrite(buf, 1, n, f);
+        fclose(sf);
+    }
 }
 
 static void print_row(const row *r)
