@@ -115,6 +115,7 @@ typedef struct row {
 typedef struct report {
     const options *o;
     const char *machine, *env_used;
+    const char *args;        /* bench_view's arguments, space-separated */
     int nproc;
     double load0[3], load1[3];
     size_t keys;
@@ -475,8 +476,8 @@ static void write_md(FILE *f, const void *ctx)
                "(the cores are shared: with a load above %d, wall times include the time other processes held "
                "the cores; *CPU ms* is the process's CPU time per frame over all its threads, which does not "
                "include that: on an idle machine a frame takes about CPU ms / threads). "
-               "Made by `scripts/bench-view.sh` (bench/bench_view.c).\n\n",
-            rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0], rp->nproc);
+               "Made by `scripts/bench-view.sh` (bench/bench_view.c), which ran `bench_view%s`.\n\n",
+            rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0], rp->nproc, rp->args);
     fprintf(f, "Scene: the Stanford dragon sampled to N points, %g units long, standing on the builtin ground, "
                "under `%s`. Bakes: %zu photons, direct_samples %d; *diffuse* = Lambert albedo %g, *glossy* = GGX "
                "albedo %g, roughness %g, specular %g. **The bake looks a glossy lobe up as if diffuse** "
@@ -574,7 +575,12 @@ int main(int argc, char **argv)
 
     char machine[256];
     bench_cpu_model(machine, sizeof machine);
-    report rp = {.o = &o, .machine = machine, .nproc = (int)sysconf(_SC_NPROCESSORS_ONLN)};
+    static char args[1024];
+    for (int i = 1; i < argc; i++) {
+        size_t used = strlen(args);
+        snprintf(args + used, sizeof args - used, " %s", argv[i]);
+    }
+    report rp = {.o = &o, .machine = machine, .nproc = (int)sysconf(_SC_NPROCESSORS_ONLN), .args = args};
     load_avg(rp.load0);
     printf("bench_view: machine %s, nproc %d, omp_get_max_threads %d, threads %d, load %.2f%s\n", machine,
            rp.nproc, omp_get_max_threads(), o.threads, rp.load0[0], o.quick ? " (quick)" : "");

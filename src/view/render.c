@@ -2,15 +2,16 @@
  *
  * Invariants:
  *  1. pixel (x, y) is a pure function of (bake, world, camera, x, y): the
- *     same value as sg_bake_render's, whatever the tiling or threads;
+ *     value sg_bake_render gives it, whatever the tiling or threads,
+ *     because sg_world_intersect4 gives each ray sg_world_intersect's hit.
  */
 #include "view/render.h"
 
 #include <omp.h>
 
-
+/* Tiles are the unit of work per thread (dynamic schedule), as in
+ * sg_bake_render; quads are traced within them. */
 enum { TILE = 16 };
-
 
 sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *desc, sg_image *out,
                          double *seconds, sg_error *err)

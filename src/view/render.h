@@ -4,12 +4,12 @@
  * viewer.
  *
  * What it does: sg_view_render fills a width x height scene-linear image
- * equal to sg_bake_render's for the same bake, world and camera (tested
- * to 1e-5 relative per pixel; the lookup is the bake's, the weights are
- * those of sg_scene_hit_weights). It differs in how it gets there: pixels
- * are traced in 16 x 16 tiles, 2 x 2 quads at a time, the primary rays
- * through sg_world_intersect_weights (the hit's interpolation weights come
- * back with the hit, no second pass over the leaf).
+ * equal to sg_bake_render's for the same bake, world and camera, bit for
+ * bit (tested): the hits are sg_world_intersect's, the lookup is the
+ * bake's own sg_bake_lookup. It differs in how it gets there: the pixels
+ * of each 16 x 16 tile are traced as 2 x 2 quads, the four camera rays
+ * sharing one kd-tree traversal per model (sg_world_intersect4); about
+ * 1.1-1.2x less CPU per frame than one ray at a time.
  * What it does NOT do: glossy lobes (the bake has no directional bins
  * yet), anti-aliasing, display transforms (display/ocio.h).
  *
