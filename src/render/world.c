@@ -229,6 +229,87 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
     return found;
 }
 
+/* The model order of world_nearest for one ray: models sorted by where
+ * the ray enters their boxes (insertion sort, stable). n <= SORTED_MAX. */
+static void model_order(const sg_world *w, const sg_ray *r, size_t n, size_t *order, float *entry)
+{
+    for (size_t i = 0; i < n; ++i) {
+        float e = box_entry(&w->model_bounds[i], r);
+        size_t j = i;
+        for (; j > 0 && entry[j - 1] > e; --j) {
+            entry[j] = entry[j - 1];
+            order[j] = order[j - 1];
+        }
+        entry[j] = e;
+        order[j] = i;
+    }
+}
+
+unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
+                             sg_ray_stats *stats)
+{
+    enum { SORTED_MAX = 16 };
+    mask &= 15u;
+    size_t n = w->count <= SORTED_MAX ? w->count : 0;
+    size_t order[4][SORTED_MAX];
+    float entry[4][SORTED_MAX];
+    int same = n > 0;
+    for (unsigned m = mask; m && same; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        model_order(w, &rays[r], n, order[r], entry[r]);
+        same = memcmp(order[r], order[__builtin_ctz(mask)], n * sizeof order[r][0]) == 0;
+    }
+    unsigned found = 0;
+    if (!same) {
+        /* The rays visit the models in different orders: one at a time
+         * (the order decides each model's tmax, and so the bits). */
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (sg_world_intersect(w, &rays[r], &h[r], stats))
+                found |= 1u << r;
+        }
+        return found;
+    }
+    /* world_nearest for each ray, the models in the rays' common order,
+     * each model traced for the rays still searching in one call. */
+    sg_ray rr[4];
+    sg_ray_stats local = {0};
+    memcpy(rr, rays, sizeof rr);
+    const size_t *ord = order[__builtin_ctz(mask)];
+    unsigned searching = mask;
+    for (size_t k = 0; k < w->count && searching; ++k) {
+        for (unsigned m = searching; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (!(entry[r][k] <= rr[r].tmax))
+                searching &= ~(1u << r); /* sorted: every later box starts farther */
+        }
+        if (!searching)
+            break;
+        size_t i = ord[k];
+        sg_hit hit[4];
+        unsigned got = sg_scene_intersect4(w->scenes[i], rr, searching, hit, stats ? &local : NULL);
+        for (unsigned m = got; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            h[r].hit = hit[r];
+            h[r].model = (uint32_t)i;
+            rr[r].tmax = hit[r].t; /* invariant 2 */
+        }
+        found |= got;
+    }
+    for (unsigned m = mask & ~found; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        h[r].hit.splat = SG_INVALID_ID;
+        h[r].model = 0;
+    }
+    if (stats) {
+        /* one ray and at most one hit per ray, as sg_world_intersect counts */
+        local.rays = (uint64_t)__builtin_popcount(mask);
+        local.hits = (uint64_t)__builtin_popcount(found);
+        sg_ray_stats_add(stats, &local);
+    }
+    return found;
+}
+
 int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats)
 {
     sg_ray_stats local = {0};

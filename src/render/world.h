@@ -47,6 +47,15 @@ void sg_world_destroy(sg_world *w);
  * counters of every model it visits. */
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats);
 
+/* Up to four rays at once (bit r of mask: rays[r] is traced), e.g. a
+ * 2 x 2 quad of camera rays: each gets exactly sg_world_intersect's hit
+ * (bit for bit, tested). Rays that visit the models in the same order
+ * (by box entry) share each model's traversal (sg_scene_intersect4);
+ * otherwise they are traced one by one. Returns the mask of the rays
+ * that hit; h[r] of a ray outside mask is left alone. */
+unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
+                             sg_ray_stats *stats);
+
 /* 1 if any model is hit in [tmin, tmax]. */
 int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats);
 

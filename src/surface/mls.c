@@ -118,17 +118,90 @@ float sg_mls_field_indexed(const sg_pointset *ps, const uint32_t *idx, size_t co
 
 /* The splats of a leaf whose support meets the ray, with the per-ray
  * constants the sampling loop needs. */
+/* ACTIVE_CAP: 8 entries of slack, for the 8-lane stores of the packed
+ * survivors at the end of the list (gather_actives). */
+enum { ACTIVE_CAP = MAX_ACTIVE + 8 };
 typedef struct actives {
     int n;
-    float qx[MAX_ACTIVE], qy[MAX_ACTIVE], qz[MAX_ACTIVE]; /* p - o          */
-    float tc[MAX_ACTIVE];                                 /* q . d          */
-    float perp2[MAX_ACTIVE];                              /* |q|^2 - tc^2   */
-    float inv_r2[MAX_ACTIVE];                             /* 1 / r^2        */
-    float nx[MAX_ACTIVE], ny[MAX_ACTIVE], nz[MAX_ACTIVE];
-    uint32_t id[MAX_ACTIVE];
+    float qx[ACTIVE_CAP], qy[ACTIVE_CAP], qz[ACTIVE_CAP]; /* p - o          */
+    float tc[ACTIVE_CAP];                                 /* q . d          */
+    float perp2[ACTIVE_CAP];                              /* |q|^2 - tc^2   */
+    float inv_r2[ACTIVE_CAP];                             /* 1 / r^2        */
+    float nx[ACTIVE_CAP], ny[ACTIVE_CAP], nz[ACTIVE_CAP];
+    uint32_t id[ACTIVE_CAP];
 } actives;
 
 #ifdef SG_MLS_AVX2
+/* COMPRESS_LUT[m]: the lanes set in the 8-bit mask m, in increasing order,
+ * one byte each (unused bytes 0): the permutation that packs a vector's
+ * selected lanes to its front (AVX2 has no compress instruction). */
+static const uint64_t COMPRESS_LUT[256] = {
+    0x0000000000000000ull, 0x0000000000000000ull, 0x0000000000000001ull, 0x0000000000000100ull,
+    0x0000000000000002ull, 0x0000000000000200ull, 0x0000000000000201ull, 0x0000000000020100ull,
+    0x0000000000000003ull, 0x0000000000000300ull, 0x0000000000000301ull, 0x0000000000030100ull,
+    0x0000000000000302ull, 0x0000000000030200ull, 0x0000000000030201ull, 0x0000000003020100ull,
+    0x0000000000000004ull, 0x0000000000000400ull, 0x0000000000000401ull, 0x0000000000040100ull,
+    0x0000000000000402ull, 0x0000000000040200ull, 0x0000000000040201ull, 0x0000000004020100ull,
+    0x0000000000000403ull, 0x0000000000040300ull, 0x0000000000040301ull, 0x0000000004030100ull,
+    0x0000000000040302ull, 0x0000000004030200ull, 0x0000000004030201ull, 0x0000000403020100ull,
+    0x0000000000000005ull, 0x0000000000000500ull, 0x0000000000000501ull, 0x0000000000050100ull,
+    0x0000000000000502ull, 0x0000000000050200ull, 0x0000000000050201ull, 0x0000000005020100ull,
+    0x0000000000000503ull, 0x0000000000050300ull, 0x0000000000050301ull, 0x0000000005030100ull,
+    0x0000000000050302ull, 0x0000000005030200ull, 0x0000000005030201ull, 0x0000000503020100ull,
+    0x0000000000000504ull, 0x0000000000050400ull, 0x0000000000050401ull, 0x0000000005040100ull,
+    0x0000000000050402ull, 0x0000000005040200ull, 0x0000000005040201ull, 0x0000000504020100ull,
+    0x0000000000050403ull, 0x0000000005040300ull, 0x0000000005040301ull, 0x0000000504030100ull,
+    0x0000000005040302ull, 0x0000000504030200ull, 0x0000000504030201ull, 0x0000050403020100ull,
+    0x0000000000000006ull, 0x0000000000000600ull, 0x0000000000000601ull, 0x0000000000060100ull,
+    0x0000000000000602ull, 0x0000000000060200ull, 0x0000000000060201ull, 0x0000000006020100ull,
+    0x0000000000000603ull, 0x0000000000060300ull, 0x0000000000060301ull, 0x0000000006030100ull,
+    0x0000000000060302ull, 0x0000000006030200ull, 0x0000000006030201ull, 0x0000000603020100ull,
+    0x0000000000000604ull, 0x0000000000060400ull, 0x0000000000060401ull, 0x0000000006040100ull,
+    0x0000000000060402ull, 0x0000000006040200ull, 0x0000000006040201ull, 0x0000000604020100ull,
+    0x0000000000060403ull, 0x0000000006040300ull, 0x0000000006040301ull, 0x0000000604030100ull,
+    0x0000000006040302ull, 0x0000000604030200ull, 0x0000000604030201ull, 0x0000060403020100ull,
+    0x0000000000000605ull, 0x0000000000060500ull, 0x0000000000060501ull, 0x0000000006050100ull,
+    0x0000000000060502ull, 0x0000000006050200ull, 0x0000000006050201ull, 0x0000000605020100ull,
+    0x0000000000060503ull, 0x0000000006050300ull, 0x0000000006050301ull, 0x0000000605030100ull,
+    0x0000000006050302ull, 0x0000000605030200ull, 0x0000000605030201ull, 0x0000060503020100ull,
+    0x0000000000060504ull, 0x0000000006050400ull, 0x0000000006050401ull, 0x0000000605040100ull,
+    0x0000000006050402ull, 0x0000000605040200ull, 0x0000000605040201ull, 0x0000060504020100ull,
+    0x0000000006050403ull, 0x0000000605040300ull, 0x0000000605040301ull, 0x0000060504030100ull,
+    0x0000000605040302ull, 0x0000060504030200ull, 0x0000060504030201ull, 0x0006050403020100ull,
+    0x0000000000000007ull, 0x0000000000000700ull, 0x0000000000000701ull, 0x0000000000070100ull,
+    0x0000000000000702ull, 0x0000000000070200ull, 0x0000000000070201ull, 0x0000000007020100ull,
+    0x0000000000000703ull, 0x0000000000070300ull, 0x0000000000070301ull, 0x0000000007030100ull,
+    0x0000000000070302ull, 0x0000000007030200ull, 0x0000000007030201ull, 0x0000000703020100ull,
+    0x0000000000000704ull, 0x0000000000070400ull, 0x0000000000070401ull, 0x0000000007040100ull,
+    0x0000000000070402ull, 0x0000000007040200ull, 0x0000000007040201ull, 0x0000000704020100ull,
+    0x0000000000070403ull, 0x0000000007040300ull, 0x0000000007040301ull, 0x0000000704030100ull,
+    0x0000000007040302ull, 0x0000000704030200ull, 0x0000000704030201ull, 0x0000070403020100ull,
+    0x0000000000000705ull, 0x0000000000070500ull, 0x0000000000070501ull, 0x0000000007050100ull,
+    0x0000000000070502ull, 0x0000000007050200ull, 0x0000000007050201ull, 0x0000000705020100ull,
+    0x0000000000070503ull, 0x0000000007050300ull, 0x0000000007050301ull, 0x0000000705030100ull,
+    0x0000000007050302ull, 0x0000000705030200ull, 0x0000000705030201ull, 0x0000070503020100ull,
+    0x0000000000070504ull, 0x0000000007050400ull, 0x0000000007050401ull, 0x0000000705040100ull,
+    0x0000000007050402ull, 0x0000000705040200ull, 0x0000000705040201ull, 0x0000070504020100ull,
+    0x0000000007050403ull, 0x0000000705040300ull, 0x0000000705040301ull, 0x0000070504030100ull,
+    0x0000000705040302ull, 0x0000070504030200ull, 0x0000070504030201ull, 0x0007050403020100ull,
+    0x0000000000000706ull, 0x0000000000070600ull, 0x0000000000070601ull, 0x0000000007060100ull,
+    0x0000000000070602ull, 0x0000000007060200ull, 0x0000000007060201ull, 0x0000000706020100ull,
+    0x0000000000070603ull, 0x0000000007060300ull, 0x0000000007060301ull, 0x0000000706030100ull,
+    0x0000000007060302ull, 0x0000000706030200ull, 0x0000000706030201ull, 0x0000070603020100ull,
+    0x0000000000070604ull, 0x0000000007060400ull, 0x0000000007060401ull, 0x0000000706040100ull,
+    0x0000000007060402ull, 0x0000000706040200ull, 0x0000000706040201ull, 0x0000070604020100ull,
+    0x0000000007060403ull, 0x0000000706040300ull, 0x0000000706040301ull, 0x0000070604030100ull,
+    0x0000000706040302ull, 0x0000070604030200ull, 0x0000070604030201ull, 0x0007060403020100ull,
+    0x0000000000070605ull, 0x0000000007060500ull, 0x0000000007060501ull, 0x0000000706050100ull,
+    0x0000000007060502ull, 0x0000000706050200ull, 0x0000000706050201ull, 0x0000070605020100ull,
+    0x0000000007060503ull, 0x0000000706050300ull, 0x0000000706050301ull, 0x0000070605030100ull,
+    0x0000000706050302ull, 0x0000070605030200ull, 0x0000070605030201ull, 0x0007060503020100ull,
+    0x0000000007060504ull, 0x0000000706050400ull, 0x0000000706050401ull, 0x0000070605040100ull,
+    0x0000000706050402ull, 0x0000070605040200ull, 0x0000070605040201ull, 0x0007060504020100ull,
+    0x0000000706050403ull, 0x0000070605040300ull, 0x0000070605040301ull, 0x0007060504030100ull,
+    0x0000070605040302ull, 0x0007060504030200ull, 0x0007060504030201ull, 0x0706050403020100ull,
+};
+
 /* exp(x) for x in [-4, 0] to ~1e-6 relative: 2^(x log2 e) split into an
  * integer power (exponent bits) and a degree-5 polynomial on [0,1). */
 static inline __m256 exp_m4_0(__m256 x)
@@ -228,6 +301,28 @@ static uint32_t dominant_splat(const actives *a, sg_kernel kernel, float t)
 {
     float wmax = 0.0f;
     uint32_t best = SG_INVALID_ID;
+#ifdef SG_MLS_AVX2
+    if (kernel == SG_KERNEL_HAT) {
+        /* The hat weights 8 at a time, with the scalar loop's operations
+         * (multiply, add, multiply, sqrt, subtract: no fused steps), so
+         * the same values; then the same first-largest scan. A weight
+         * outside the support is <= 0 (or NaN) and never beats wmax >= 0. */
+        float w[ACTIVE_CAP];
+        const __m256 vt = _mm256_set1_ps(t), one = _mm256_set1_ps(1.0f);
+        for (int j = 0; j < a->n; j += 8) {
+            __m256 dt = _mm256_sub_ps(vt, _mm256_loadu_ps(a->tc + j));
+            __m256 s2 = _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(dt, dt), _mm256_loadu_ps(a->perp2 + j)),
+                                      _mm256_loadu_ps(a->inv_r2 + j));
+            _mm256_storeu_ps(w + j, _mm256_sub_ps(one, _mm256_sqrt_ps(s2)));
+        }
+        for (int j = 0; j < a->n; ++j)
+            if (w[j] > wmax) {
+                wmax = w[j];
+                best = a->id[j];
+            }
+        return best;
+    }
+#endif
     for (int j = 0; j < a->n; ++j) {
         float dt = t - a->tc[j];
         float w = kernel_sq(kernel, (dt * dt + a->perp2[j]) * a->inv_r2[j]);
@@ -296,18 +391,74 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
         vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
         vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
         vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
-        float aqx[8], aqy[8], aqz[8], atc[8], ap2[8];
-        _mm256_storeu_ps(aqx, qx);
-        _mm256_storeu_ps(aqy, qy);
-        _mm256_storeu_ps(aqz, qz);
-        _mm256_storeu_ps(atc, tc);
-        _mm256_storeu_ps(ap2, perp2);
-        while (bits) {
-            int l = __builtin_ctz((unsigned)bits);
-            bits &= bits - 1;
-            if (!push_active(s, i + (size_t)l, aqx[l], aqy[l], aqz[l], atc[l], ap2[l], a))
+        /* Append the survivors in lane order (the scalar loop's order):
+         * pack the selected lanes to the front of each vector and store
+         * all 8 at the list's end; n only advances by the survivors. */
+        int n = a->n, pc = __builtin_popcount((unsigned)bits);
+        if (n + pc > MAX_ACTIVE)
+            return -1;
+        const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
+        __m256 ir = _mm256_loadu_ps(s->inv_r + i);
+        _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
+        _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
+        _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
+        _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
+        _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
+        _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(ir, ir), perm));
+        _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->nx + i), perm));
+        _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->ny + i), perm));
+        _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->nz + i), perm));
+        _mm256_storeu_si256((__m256i *)(void *)(a->id + n),
+                            _mm256_permutevar8x32_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(s->id + i)),
+                                                        perm));
+        a->n = n + pc;
+    }
+    if (i < end) {
+        /* The last 1..7 splats in one masked step (no load past the
+         * arrays' end) with the scalar loop's operations in its order
+         * (separate multiplies and adds, perp2 < 0 set to 0, the same
+         * rejection tests), so each splat gets the values it would get
+         * there, bit for bit. */
+        const __m256i lane = _mm256_cmpgt_epi32(_mm256_set1_epi32((int)(end - i)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        __m256 qx = _mm256_sub_ps(_mm256_maskload_ps(s->px + i, lane), ox);
+        __m256 qy = _mm256_sub_ps(_mm256_maskload_ps(s->py + i, lane), oy);
+        __m256 qz = _mm256_sub_ps(_mm256_maskload_ps(s->pz + i, lane), oz);
+        __m256 tc = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, dx), _mm256_mul_ps(qy, dy)), _mm256_mul_ps(qz, dz));
+        __m256 q2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, qx), _mm256_mul_ps(qy, qy)), _mm256_mul_ps(qz, qz));
+        __m256 perp2 = _mm256_sub_ps(q2, _mm256_mul_ps(tc, tc));
+        perp2 = _mm256_blendv_ps(perp2, zero, _mm256_cmp_ps(perp2, zero, _CMP_LT_OQ));
+        __m256 r = _mm256_maskload_ps(s->r + i, lane);
+        __m256 r2 = _mm256_mul_ps(r, r);
+        __m256 inside = _mm256_and_ps(_mm256_cmp_ps(perp2, r2, _CMP_LT_OQ), _mm256_castsi256_ps(lane));
+        __m256 h = _mm256_sqrt_ps(_mm256_sub_ps(r2, perp2));
+        __m256 lo = _mm256_sub_ps(tc, h), hi = _mm256_add_ps(tc, h);
+        __m256 reject = _mm256_or_ps(_mm256_cmp_ps(hi, vt0, _CMP_LT_OQ), _mm256_cmp_ps(lo, vt1, _CMP_GT_OQ));
+        __m256 m = _mm256_andnot_ps(reject, inside);
+        int bits = _mm256_movemask_ps(m);
+        if (bits) {
+            vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
+            vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
+            vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
+            int n = a->n, pc = __builtin_popcount((unsigned)bits);
+            if (n + pc > MAX_ACTIVE)
                 return -1;
+            const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
+            __m256 ir = _mm256_maskload_ps(s->inv_r + i, lane);
+            _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
+            _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
+            _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
+            _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
+            _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
+            _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(ir, ir), perm));
+            _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nx + i, lane), perm));
+            _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->ny + i, lane), perm));
+            _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nz + i, lane), perm));
+            _mm256_storeu_si256((__m256i *)(void *)(a->id + n),
+                                _mm256_permutevar8x32_epi32(_mm256_maskload_epi32((const int *)(const void *)(s->id + i), lane),
+                                                            perm));
+            a->n = n + pc;
         }
+        i = end;
     }
     {
         float tmp[8];

@@ -25,6 +25,14 @@
 #include "surface/disk.h"
 #include "surface/mls.h"
 
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#define SG_SCENE_TRAVERSE4 1 /* the quad traversal; else rays one by one */
+#endif
+
 enum { STACK_SIZE = 128 };
 
 struct sg_scene {
@@ -193,7 +201,49 @@ void sg_scene_destroy(sg_scene *sc)
     sg_free(sc);
 }
 
-int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+/* Adds splat reference i to the weights kept so far (the exact
+ * arithmetic of the lookup: every caller gets the same bits). */
+/* Keeps weight w > 0 of splat reference i among the largest max. */
+static inline void hit_weights_keep(const sg_splat_soa *s, size_t i, float w, uint32_t *ids, float *weights, int max,
+                                    int *n, float *total)
+{
+    *total += w;
+    if (*n < max) {
+        ids[*n] = s->id[i];
+        weights[(*n)++] = w;
+        return;
+    }
+    /* Full: replace the smallest weight kept. */
+    int k = 0;
+    for (int j = 1; j < *n; ++j)
+        if (weights[j] < weights[k])
+            k = j;
+    if (w > weights[k]) {
+        ids[k] = s->id[i];
+        weights[k] = w;
+    }
+}
+
+/* Adds splat reference i to the weights kept so far (the exact
+ * arithmetic of the lookup: every caller gets the same bits). */
+static inline void hit_weights_add(const sg_scene *sc, const sg_hit *hit, size_t i, uint32_t *ids, float *weights,
+                                   int max, int *n, float *total)
+{
+    const sg_splat_soa *s = &sc->soa;
+    float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
+    float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
+    if (w > 0.0f)
+        hit_weights_keep(s, i, w, ids, weights, max, n, total);
+}
+
+/* A splat passes the pre-filter when (d / r)^2 < HIT_WEIGHTS_SLACK: the
+ * kernel is zero from d / r >= 1 on (sg_mls_kernel), and the filter's
+ * squared ratio (no sqrt, maybe fused) is within a few ulps of the exact
+ * one, so 1e-4 of slack keeps every splat the exact test would keep. */
+static const float HIT_WEIGHTS_SLACK = 1.0001f;
+
+/* prefilter 0: the scalar reference, every splat of the leaf weighed. */
+static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max, int prefilter)
 {
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
@@ -201,27 +251,53 @@ int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, f
     float total = 0.0f;
     if (hit->leaf < sc->tree.leaf_count) {
         const sg_splat_soa *s = &sc->soa;
-        size_t first = sc->tree.leaf_first[hit->leaf], end = sc->tree.leaf_first[hit->leaf + 1];
-        for (size_t i = first; i < end; ++i) {
+        size_t i = sc->tree.leaf_first[hit->leaf], end = sc->tree.leaf_first[hit->leaf + 1];
+        /* Most of a leaf's splats do not reach the hit: find the ones that
+         * may with a cheap test on 8 at a time (squared distances, no sqrt
+         * or kernel), then weigh those exactly, in leaf order as before. */
+#if defined(__AVX2__) && defined(__FMA__)
+        const __m256 hx = _mm256_set1_ps(hit->p.x), hy = _mm256_set1_ps(hit->p.y), hz = _mm256_set1_ps(hit->p.z);
+        const __m256 slack = _mm256_set1_ps(HIT_WEIGHTS_SLACK);
+        for (; prefilter && i + 8 <= end; i += 8) {
+            __m256 dx = _mm256_sub_ps(hx, _mm256_loadu_ps(s->px + i));
+            __m256 dy = _mm256_sub_ps(hy, _mm256_loadu_ps(s->py + i));
+            __m256 dz = _mm256_sub_ps(hz, _mm256_loadu_ps(s->pz + i));
+            __m256 ir = _mm256_loadu_ps(s->inv_r + i);
+            if (sc->desc.kernel == SG_KERNEL_HAT) {
+                /* The exact weights 8 at a time: the scalar expression's
+                 * operations in its order (no fused steps), so the same
+                 * bits; w = 1 - s inside the support, else 0. */
+                __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                          _mm256_mul_ps(dz, dz));
+                __m256 sr = _mm256_mul_ps(_mm256_sqrt_ps(d2), ir);
+                __m256 inside = _mm256_cmp_ps(sr, _mm256_set1_ps(1.0f), _CMP_LT_OQ);
+                __m256 w = _mm256_and_ps(inside, _mm256_sub_ps(_mm256_set1_ps(1.0f), sr));
+                unsigned bits = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(w, _mm256_setzero_ps(), _CMP_GT_OQ));
+                if (!bits)
+                    continue;
+                float wl[8];
+                _mm256_storeu_ps(wl, w);
+                while (bits) {
+                    int l = __builtin_ctz(bits);
+                    bits &= bits - 1;
+                    hit_weights_keep(s, i + (size_t)l, wl[l], ids, weights, max, &n, &total);
+                }
+                continue;
+            }
+            __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+            __m256 s2 = _mm256_mul_ps(_mm256_mul_ps(d2, ir), ir);
+            unsigned bits = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(s2, slack, _CMP_LT_OQ));
+            while (bits) {
+                int l = __builtin_ctz(bits);
+                bits &= bits - 1;
+                hit_weights_add(sc, hit, i + (size_t)l, ids, weights, max, &n, &total);
+            }
+        }
+#endif
+        for (; i < end; ++i) {
             float dx = hit->p.x - s->px[i], dy = hit->p.y - s->py[i], dz = hit->p.z - s->pz[i];
-            float w = sg_mls_kernel(sc->desc.kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[i]);
-            if (w <= 0.0f)
-                continue;
-            total += w;
-            if (n < max) {
-                ids[n] = s->id[i];
-                weights[n++] = w;
-                continue;
-            }
-            /* Full: replace the smallest weight kept. */
-            int k = 0;
-            for (int j = 1; j < n; ++j)
-                if (weights[j] < weights[k])
-                    k = j;
-            if (w > weights[k]) {
-                ids[k] = s->id[i];
-                weights[k] = w;
-            }
+            if (!prefilter || (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i] < HIT_WEIGHTS_SLACK)
+                hit_weights_add(sc, hit, i, ids, weights, max, &n, &total);
         }
     }
     if (n == 0 || !(total > 0.0f)) {
@@ -235,6 +311,16 @@ int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, f
     for (int j = 0; j < n; ++j)
         weights[j] /= kept;
     return n;
+}
+
+int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    return hit_weights(sc, hit, ids, weights, max, 1);
+}
+
+int sg_scene_hit_weights_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    return hit_weights(sc, hit, ids, weights, max, 0);
 }
 
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
@@ -398,6 +484,175 @@ done:
     st.hits = (uint64_t)found;
     if (stats)
         sg_ray_stats_add(stats, &st);
+    return found;
+}
+
+/* ---- four rays at once (primary-ray quads) ---------------------------------
+ *
+ * traverse4 walks the tree once for up to four rays that share the origin
+ * and the sign of each direction component, so that every inner node has
+ * one near child for all of them. Each ray keeps its own interval, decides
+ * at each node exactly as traverse() does (same arithmetic, same tests)
+ * whether it needs the near child, the far one or both, and is carried
+ * into a child only when it needs it: each ray meets the same leaves, in
+ * the same order, with the same intervals and carries as when traced
+ * alone, so the hits are the same bits. What the rays share is the node
+ * and leaf fetches, the stack and the control flow. MLS only: the disk
+ * blend window is per ray and ends traversal per ray (traverse()). */
+
+#ifdef SG_SCENE_TRAVERSE4
+typedef struct stack_entry4 {
+    __m128 t0, t1;   /* interval per ray (lane r: ray r)  */
+    uint32_t node;
+    unsigned mask;   /* rays that need this subtree      */
+} stack_entry4;
+
+static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask, sg_hit *hits, sg_ray_stats *stats)
+{
+    sg_ray_stats st = {0};
+    float inv[4][3], t0a[4] = {0, 0, 0, 0}, t1a[4] = {0, 0, 0, 0};
+    sg_mls_carry carry[4];
+    unsigned found = 0;
+    const float org[3] = {rays[0].org.x, rays[0].org.y, rays[0].org.z};
+    const sg_kd_node *nodes = sc->tree.nodes;
+    const uint32_t *leaf_first = sc->tree.leaf_first;
+    for (int r = 0; r < 4; ++r) {
+        inv[r][0] = inv[r][1] = inv[r][2] = 1.0f; /* lanes of rays outside mask: unused */
+        if (!(mask >> r & 1u))
+            continue;
+        st.rays++;
+        inv[r][0] = 1.0f / rays[r].dir.x;
+        inv[r][1] = 1.0f / rays[r].dir.y;
+        inv[r][2] = 1.0f / rays[r].dir.z;
+        carry[r].valid = 0;
+        if (!clip_root(&sc->tree.bounds, &rays[r], inv[r], &t0a[r], &t1a[r]))
+            mask &= ~(1u << r);
+    }
+    /* Per node, each ray's decision of traverse() in one lane: first only
+     * when ts is NaN, beyond t1 or <= 0; second only when ts < t0; else
+     * both, the near child's interval ending and the far one's starting
+     * at ts. Same operations per lane as traverse() per ray. */
+    const __m128 inv_v[3] = {_mm_setr_ps(inv[0][0], inv[1][0], inv[2][0], inv[3][0]),
+                             _mm_setr_ps(inv[0][1], inv[1][1], inv[2][1], inv[3][1]),
+                             _mm_setr_ps(inv[0][2], inv[1][2], inv[2][2], inv[3][2])};
+    const __m128 zero = _mm_setzero_ps();
+    __m128 t0 = _mm_loadu_ps(t0a), t1 = _mm_loadu_ps(t1a);
+    stack_entry4 stack[STACK_SIZE];
+    int sp = 0;
+    uint32_t ni = 0;
+    while (mask) {
+        sg_kd_node n = nodes[ni];
+        st.nodes += (uint64_t)__builtin_popcount(mask);
+        while (!sg_kd_node_is_leaf(n)) {
+            int a = sg_kd_node_axis(n);
+            uint32_t child = sg_kd_node_index(n);
+            int r0 = __builtin_ctz(mask);
+            /* Shared origin and direction signs: one near side for all. */
+            int below = org[a] < n.split || (org[a] == n.split && inv[r0][a] <= 0.0f);
+            uint32_t first = below ? child : child + 1, second = below ? child + 1 : child;
+            __m128 ts = _mm_mul_ps(_mm_set1_ps(n.split - org[a]), inv_v[a]);
+            __m128 first_only = _mm_or_ps(_mm_cmpunord_ps(ts, ts),
+                                          _mm_or_ps(_mm_cmpgt_ps(ts, t1), _mm_cmple_ps(ts, zero)));
+            __m128 second_only = _mm_andnot_ps(first_only, _mm_cmplt_ps(ts, t0));
+            unsigned fo = (unsigned)_mm_movemask_ps(first_only), so = (unsigned)_mm_movemask_ps(second_only);
+            unsigned need_first = mask & ~so, need_second = mask & ~fo;
+            if (!need_first) {
+                ni = second; /* every ray needs the far side alone: intervals stay */
+                mask = need_second;
+            } else {
+                if (need_second) {
+                    __m128 both = _mm_andnot_ps(_mm_or_ps(first_only, second_only), _mm_cmpeq_ps(zero, zero));
+                    assert(sp < STACK_SIZE);
+                    stack_entry4 *e = &stack[sp++];
+                    e->node = second;
+                    e->mask = need_second;
+                    e->t0 = _mm_blendv_ps(t0, ts, both);
+                    e->t1 = t1;
+                    t1 = _mm_blendv_ps(t1, ts, both);
+                }
+                ni = first;
+                mask = need_first;
+            }
+            n = nodes[ni];
+            st.nodes += (uint64_t)__builtin_popcount(mask);
+        }
+        uint32_t l = sg_kd_node_index(n);
+        size_t lf = leaf_first[l], lc_leaf = leaf_first[l + 1] - lf;
+        _mm_storeu_ps(t0a, t0);
+        _mm_storeu_ps(t1a, t1);
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            size_t lc = lc_leaf;
+            st.leaves++;
+            float c0 = t0a[r], c1 = t1a[r];
+            if (lc && !clip_box(&sc->tree.leaf_bounds[l], org, inv[r], &c0, &c1))
+                lc = 0;
+            if (!lc) {
+                carry[r].valid = 0;
+                continue;
+            }
+            st.isects++;
+            st.splats += lc;
+            sg_hit h;
+            if (sg_mls_intersect_leaf(&sc->soa, lf, lc, &sc->mls, &rays[r], c0, c1, &h, &carry[r])) {
+                h.leaf = l;
+                hits[r] = h;
+                found |= 1u << r;
+            }
+        }
+        /* Pop the next subtree some unfinished ray needs. */
+        mask = 0;
+        while (sp > 0 && !mask) {
+            --sp;
+            mask = stack[sp].mask & ~found;
+            ni = stack[sp].node;
+            t0 = stack[sp].t0;
+            t1 = stack[sp].t1;
+        }
+    }
+    st.hits = (uint64_t)__builtin_popcount(found);
+    if (stats)
+        sg_ray_stats_add(stats, &st);
+    return found;
+}
+
+
+/* Whether the rays of mask can share traverse4: same origin bits, same
+ * sign bit of each direction component. */
+static int can_share(const sg_ray *rays, unsigned mask)
+{
+    int r0 = __builtin_ctz(mask);
+    for (unsigned m = mask & (mask - 1); m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (memcmp(&rays[r].org, &rays[r0].org, sizeof rays[r0].org) != 0 ||
+            signbit(rays[r].dir.x) != signbit(rays[r0].dir.x) || signbit(rays[r].dir.y) != signbit(rays[r0].dir.y) ||
+            signbit(rays[r].dir.z) != signbit(rays[r0].dir.z))
+            return 0;
+    }
+    return 1;
+}
+
+#endif
+
+unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
+                             sg_ray_stats *stats)
+{
+    mask &= 15u;
+    unsigned found = 0;
+#ifdef SG_SCENE_TRAVERSE4
+    if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
+        found = traverse4(sc, rays, mask, hits, stats);
+    } else
+#endif
+    {
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (traverse(sc, &rays[r], &hits[r], stats, QUERY_NEAREST))
+                found |= 1u << r;
+        }
+    }
+    for (unsigned m = mask & ~found; m; m &= m - 1)
+        hits[__builtin_ctz(m)].splat = SG_INVALID_ID;
     return found;
 }
 

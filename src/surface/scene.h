@@ -94,6 +94,17 @@ void sg_scene_destroy(sg_scene *scene);
 int sg_scene_intersect(const sg_scene *scene, const sg_ray *ray, sg_hit *hit,
                        sg_ray_stats *stats);
 
+/* Up to four rays at once, for coherent rays such as a 2 x 2 quad of
+ * camera rays: ray r (bit r of mask set) gets exactly the hit
+ * sg_scene_intersect would give it, bit for bit (tested). Rays with the
+ * same origin and the same direction signs share one kd-tree traversal
+ * (MLS surface; each ray still decides at each node as it would alone);
+ * others, and disk surfaces, are traced one by one. Returns the mask of
+ * the rays that hit; a ray of mask that misses gets splat = SG_INVALID_ID;
+ * hits[r] of rays outside mask is left alone. stats counts per ray. */
+unsigned sg_scene_intersect4(const sg_scene *scene, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
+                             sg_ray_stats *stats);
+
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays). */
 int sg_scene_occluded(const sg_scene *scene, const sg_ray *ray, sg_ray_stats *stats);
 
@@ -105,6 +116,13 @@ int sg_scene_occluded(const sg_scene *scene, const sg_ray *ray, sg_ray_stats *st
  * falls back to the hit's dominant splat with weight 1. Use it to
  * interpolate per-splat data (baked light) without seams. */
 int sg_scene_hit_weights(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
+
+/* The scalar reference of sg_scene_hit_weights: every splat of the leaf
+ * weighed, where sg_scene_hit_weights first drops, 8 at a time, the splats
+ * whose squared distance ratio is clearly >= 1. Same result bit for bit
+ * (tested); for tests. */
+int sg_scene_hit_weights_reference(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights,
+                                   int max);
 
 /* The pointset the scene was built from (its own copy), for albedo lookups. */
 const sg_pointset *sg_scene_points(const sg_scene *scene);

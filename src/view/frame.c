@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "core/alloc.h"
+#include "view/render.h"
 
 static void frame__forget(sg_view_frame *f)
 {
@@ -102,7 +103,7 @@ sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_worl
     sg_bake_frame_desc fd = {.camera = *cam, .width = lw, .height = lh, .threads = threads};
     double sec = 0.0;
     sg_image img = {0};
-    sg_status st = sg_bake_render(b, w, &fd, &img, &sec, err);
+    sg_status st = sg_view_render(b, w, &fd, &img, &sec, err);
     if (st != SG_OK) {
         frame__forget(f);
         return st;

@@ -2,7 +2,8 @@
  * upscaled to the window and put through the display transform.
  *
  * What it does: renders width/scale x height/scale pixels (rounded up) with
- * sg_bake_render (one primary ray per pixel, the bake's lookup), turns them
+ * sg_view_render (one primary ray per pixel, the bake's lookup: the image
+ * of sg_bake_render, bit for bit, traced in 2 x 2 quads), turns them
  * into display-referred RGBA8 with sg_display_apply, and upscales the RGBA
  * to width x height by nearest neighbour: window pixel (x, y) shows low-res
  * pixel (x / scale, y / scale). The camera is the same at every scale (its
@@ -39,7 +40,7 @@ typedef struct sg_view_frame {
     sg_image linear;    /* last render, (width/scale) x (height/scale)       */
     uint8_t *rgba;      /* width x height RGBA8, display-referred            */
     uint8_t *rgba_low;  /* the render's RGBA8 before upscaling (scale > 1)   */
-    double render_seconds;  /* sg_bake_render of the last frame              */
+    double render_seconds;  /* sg_view_render of the last frame              */
     double display_seconds; /* display transform + upscale of the last frame */
     size_t rays;        /* primary rays of the last frame                    */
 } sg_view_frame;

@@ -442,6 +442,142 @@ static void test_mls_simd_matches_scalar(void **state)
     }
 }
 
+/* sg_scene_hit_weights (SIMD pre-filter) gives its scalar reference's
+ * result bit for bit: same count, ids and weights, at hits from random
+ * rays and at points pushed off the hit so that splats sit right at the
+ * edge of their support (where the pre-filter's slack matters), with a
+ * small max so that the "replace the smallest" path runs too. */
+static void check_hit_weights(sg_surface_model model, sg_kernel kernel)
+{
+    enum { MAXW = 32, RAYS = 3000 };
+    sg_pointset ps = {0};
+    float h;
+    make_sphere(&ps, 20000, 1.0f, &h);
+    sg_scene *s = build(&ps, model, kernel, 0);
+    uint64_t rng = 7;
+    int hits = 0, many = 0;
+    for (int i = 0; i < RAYS; ++i) {
+        sg_ray ray = ray_at_sphere(random_dir(&rng), 1.0f, &rng);
+        sg_hit hit;
+        if (!sg_scene_intersect(s, &ray, &hit, NULL))
+            continue;
+        ++hits;
+        for (int variant = 0; variant < 3; ++variant) {
+            sg_hit q = hit;
+            int max = variant == 2 ? 3 : MAXW;
+            if (variant == 1) /* off the hit by up to a splat radius */
+                q.p = sg_v3_add(q.p, sg_v3_scale(random_dir(&rng), 2.0f * h * sg_test_rand01(&rng)));
+            uint32_t ida[MAXW], idb[MAXW];
+            float wa[MAXW], wb[MAXW];
+            int na = sg_scene_hit_weights(s, &q, ida, wa, max);
+            int nb = sg_scene_hit_weights_reference(s, &q, idb, wb, max);
+            many += na == max;
+            int same = na == nb;
+            for (int j = 0; same && j < na; ++j)
+                same = ida[j] == idb[j] && memcmp(&wa[j], &wb[j], sizeof wa[j]) == 0;
+            if (!same)
+                fail_msg("model %d kernel %d ray %d variant %d: %d weights, reference %d; first: id %u %.9g, "
+                         "reference id %u %.9g",
+                         (int)model, (int)kernel, i, variant, na, nb, ida[0], wa[0], idb[0], wb[0]);
+        }
+    }
+    assert_true(hits > RAYS / 2 && many > 0);
+    sg_scene_destroy(s);
+    sg_pointset_free(&ps);
+}
+
+static void test_mls_hit_weights_match_reference(void **state)
+{
+    (void)state;
+    check_hit_weights(SG_SURFACE_MLS, SG_KERNEL_HAT);
+    check_hit_weights(SG_SURFACE_MLS, SG_KERNEL_GAUSSIAN);
+}
+static void test_disk_hit_weights_match_reference(void **state)
+{
+    (void)state;
+    check_hit_weights(SG_SURFACE_DISK, SG_KERNEL_HAT);
+}
+
+/* sg_scene_intersect4 gives every ray the hit sg_scene_intersect gives it,
+ * bit for bit: quads of camera-like rays from one eye (shared traversal,
+ * including rays that miss, graze or hit the far side of a gap), partial
+ * masks, and quads that cannot share (different origins or direction
+ * signs; disks). */
+static void check_intersect4(sg_surface_model model)
+{
+    sg_pointset ps = {0};
+    float h;
+    make_sphere(&ps, 20000, 1.0f, &h);
+    sg_scene *s = build(&ps, model, SG_KERNEL_HAT, 0);
+    uint64_t rng = 3;
+    int hits = 0, rays_traced = 0;
+    for (int i = 0; i < 2000; ++i) {
+        sg_vec3 eye = sg_v3_scale(random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
+        sg_vec3 at = sg_v3_scale(random_dir(&rng), 1.3f * sg_test_rand01(&rng));
+        sg_vec3 fwd = sg_v3_normalize(sg_v3_sub(at, eye));
+        sg_vec3 u = sg_v3_normalize(sg_v3_cross(fwd, fabsf(fwd.y) < 0.9f ? sg_v3(0, 1, 0) : sg_v3(1, 0, 0)));
+        sg_vec3 v = sg_v3_cross(u, fwd);
+        float pix = i % 4 == 0 ? 0.05f : 0.002f; /* wide quads too */
+        sg_ray rays[4];
+        for (int q = 0; q < 4; ++q) {
+            sg_vec3 d = sg_v3_add(fwd, sg_v3_add(sg_v3_scale(u, pix * (float)(q & 1)), sg_v3_scale(v, pix * (float)(q >> 1))));
+            rays[q] = (sg_ray){.org = eye, .dir = sg_v3_normalize(d), .tmin = 0, .tmax = INFINITY};
+        }
+        if (i % 7 == 1) /* one ray from elsewhere: no sharing */
+            rays[2].org = sg_v3_add(eye, sg_v3(0.01f, 0, 0));
+        if (i % 5 == 2) /* a finite tmax, as a later model of a world sets */
+            rays[1].tmax = 0.5f * sg_v3_length(sg_v3_sub(eye, at));
+        unsigned mask = i % 3 == 0 ? 15u : (unsigned)(1 + i % 15);
+        sg_hit h4[4], h1;
+        for (int q = 0; q < 4; ++q)
+            h4[q].splat = 12345u; /* must stay for rays outside mask */
+        unsigned got = sg_scene_intersect4(s, rays, mask, h4, NULL);
+        for (int q = 0; q < 4; ++q) {
+            if (!(mask >> q & 1u)) {
+                assert_int_equal(h4[q].splat, 12345u);
+                assert_false(got >> q & 1u);
+                continue;
+            }
+            ++rays_traced;
+            int f = sg_scene_intersect(s, &rays[q], &h1, NULL);
+            if (f != (int)(got >> q & 1u))
+                fail_msg("model %d quad %d ray %d: intersect %d, intersect4 %u", (int)model, i, q, f, got >> q & 1u);
+            if (!f) {
+                assert_int_equal(h4[q].splat, SG_INVALID_ID);
+                continue;
+            }
+            ++hits;
+            if (memcmp(&h1.t, &h4[q].t, sizeof h1.t) || memcmp(&h1.p, &h4[q].p, sizeof h1.p) ||
+                memcmp(&h1.n, &h4[q].n, sizeof h1.n) || h1.splat != h4[q].splat || h1.leaf != h4[q].leaf)
+                fail_msg("model %d quad %d ray %d: t %.9g / %.9g, splat %u / %u, leaf %u / %u", (int)model, i, q,
+                         h1.t, h4[q].t, h1.splat, h4[q].splat, h1.leaf, h4[q].leaf);
+        }
+    }
+    print_message("model %d: %d hits of %d rays\n", (int)model, hits, rays_traced);
+    assert_true(hits > rays_traced / 4 && hits < rays_traced);
+    /* Stats: one ray per traced ray. */
+    sg_ray_stats st = {0};
+    sg_ray rays[4];
+    for (int q = 0; q < 4; ++q)
+        rays[q] = (sg_ray){.org = sg_v3(0, 0, 5), .dir = sg_v3_normalize(sg_v3(0.01f * q, 0, -1)), .tmax = INFINITY};
+    assert_int_equal(sg_scene_intersect4(s, rays, 7u, (sg_hit[4]){0}, &st), 7u);
+    assert_int_equal(st.rays, 3);
+    assert_int_equal(st.hits, 3);
+    sg_scene_destroy(s);
+    sg_pointset_free(&ps);
+}
+
+static void test_mls_intersect4_matches_single(void **state)
+{
+    (void)state;
+    check_intersect4(SG_SURFACE_MLS);
+}
+static void test_disk_intersect4_matches_single(void **state)
+{
+    (void)state;
+    check_intersect4(SG_SURFACE_DISK);
+}
+
 /* Bad input names the problem and creates nothing. */
 static void test_scene_rejects_bad_points(void **state)
 {
@@ -508,6 +644,10 @@ int main(void)
         cmocka_unit_test(test_mls_corner_reflection),
         cmocka_unit_test(test_disk_corner_reflection),
         cmocka_unit_test(test_mls_simd_matches_scalar),
+        cmocka_unit_test(test_mls_hit_weights_match_reference),
+        cmocka_unit_test(test_disk_hit_weights_match_reference),
+        cmocka_unit_test(test_mls_intersect4_matches_single),
+        cmocka_unit_test(test_disk_intersect4_matches_single),
         cmocka_unit_test(test_scene_rejects_bad_points),
         cmocka_unit_test(test_scene_stats),
     };
