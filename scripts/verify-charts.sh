@@ -62,13 +62,14 @@ fi
 # ---- 2. bake: bake time against error ---------------------------------------
 csv="$dir/bake.csv"
 if [ -f "$csv" ]; then
-  # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse
+  # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse,
+  # 19 spacing, 20 sample points
   plots=()
   colours=("#1f6fb4" "#d62728" "#2ca02c" "#9467bd" "#ff7f0e")
   i=0
-  for sw in photons photons_carry_direct k direct; do
+  for sw in photons photons_carry_direct k direct spacing; do
     f="$tmpd/b_$sw"
-    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : "S=" $4); print $9, $14, lab }' "$csv" | sort -n >"$f"
+    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : (s == "spacing" ? ($19 < 0 ? "all" : sprintf("s=%g", $19)) : "S=" $4)); print $9, $14, lab }' "$csv" | sort -n >"$f"
     [ -s "$f" ] || continue
     c="${colours[$i]}"
     case "$sw" in
@@ -76,6 +77,7 @@ if [ -f "$csv" ]; then
       photons_carry_direct) t="photon count, photons carry the direct light (k 64)";;
       k) t="gather k ($(awk -F, 'NR > 1 && $1 == "k" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
       direct) t="direct-light samples S ($(awk -F, 'NR > 1 && $1 == "direct" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
+      spacing) t="sample-point spacing (x median splat radius; default 4 is on the photon curve)";;
     esac
     plots+=("\"$f\" u 1:2 w linespoints lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
     plots+=("\"$f\" u 1:2:3 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")

@@ -216,6 +216,7 @@ static sg_status run_direct(const plan *p, const sg_world *w, const sg_camera *c
 
 typedef struct bake_run {
     double bake_s, trace_s, gather_s, direct_s, bake_mib, frame_s;
+    size_t sample_points;  /* of all models (sg_bake_stats)               */
     sg_image img;          /* lookup frame at the error size             */
 } bake_run;
 
@@ -234,6 +235,7 @@ static sg_status run_bake(const plan *p, const sg_world *w, const sg_camera *cam
     out->trace_s = bs.trace_seconds;
     out->gather_s = bs.gather_seconds;
     out->direct_s = bs.direct_seconds;
+    out->sample_points = bs.sample_points;
     out->bake_mib = (double)bs.memory_bytes / (1024.0 * 1024.0);
     sg_bake_frame_desc fd = {.camera = *cam, .width = p->frame, .height = p->frame};
     out->frame_s = INFINITY;
@@ -362,6 +364,7 @@ typedef struct bake_pt {
     const char *sweep;
     size_t photons, k;
     int direct;
+    float spacing; /* sg_bake_desc.sample_spacing: 0 the material's, < 0 every splat */
 } bake_pt;
 
 static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *err)
@@ -371,23 +374,29 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
     if (c->d.ci) {
         static const size_t ph[] = {10000, 40000};
         for (int i = 0; i < 2; i++) {
-            pts[n++] = (bake_pt){"photons", ph[i], 64, 2};
-            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1};
+            pts[n++] = (bake_pt){"photons", ph[i], 64, 2, 0.0f};
+            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1, 0.0f};
         }
-        pts[n++] = (bake_pt){"k", 20000, 16, 2};
-        pts[n++] = (bake_pt){"direct", 20000, 64, 1};
+        pts[n++] = (bake_pt){"k", 20000, 16, 2, 0.0f};
+        pts[n++] = (bake_pt){"direct", 20000, 64, 1, 0.0f};
+        pts[n++] = (bake_pt){"spacing", 20000, 64, 2, 8.0f};
     } else {
         static const size_t ph[] = {250000, 1000000, 4000000};
         for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"photons", ph[i], 64, 16};
+            pts[n++] = (bake_pt){"photons", ph[i], 64, 16, 0.0f};
         for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1};
+            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1, 0.0f};
         static const size_t ks[] = {16, 32, 128};
         for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"k", 1000000, ks[i], 16};
+            pts[n++] = (bake_pt){"k", 1000000, ks[i], 16, 0.0f};
         static const int ds[] = {1, 4};
         for (int i = 0; i < 2; i++)
-            pts[n++] = (bake_pt){"direct", 1000000, 64, ds[i]};
+            pts[n++] = (bake_pt){"direct", 1000000, 64, ds[i], 0.0f};
+        /* Sample density: spacing 2, 8 x the median radius and every splat
+         * beside the default 4 of the photons sweep's 1M point. */
+        static const float sp[] = {2.0f, 8.0f, -1.0f};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"spacing", 1000000, 64, 16, sp[i]};
     }
     sg_scene_file sf = {0};
     sg_world *w = NULL;
@@ -403,12 +412,12 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
     st = reference(c, p, w, &sf, &ms->cam, &ref, &noise, err);
     vtable t = {0};
     sg_verify__tprintf(&t, "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,"
-                           "frame_size,rel_mse,energy_ratio,p99,nan,ref_noise\n");
+                           "frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points\n");
     double best_s = INFINITY, best_err = INFINITY;
     int best = -1, best_reached = 0;
     for (int i = 0; i < n && st == SG_OK; i++) {
         sg_bake_desc bd = {.photons = {.count = pts[i].photons}, .gather = {.k = (unsigned)pts[i].k},
-                           .direct_samples = pts[i].direct};
+                           .direct_samples = pts[i].direct, .sample_spacing = pts[i].spacing};
         bake_run br;
         st = run_bake(p, w, &ms->cam, &bd, 1, &br, err);
         if (st != SG_OK)
@@ -421,10 +430,11 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
         sg_image_free(&br.img);
         if (st != SG_OK)
             break;
-        sg_verify__tprintf(&t, "%s,%zu,%zu,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.3f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3g\n",
+        sg_verify__tprintf(&t, "%s,%zu,%zu,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.3f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3g,%g,%zu\n",
                            pts[i].sweep, pts[i].photons, pts[i].k, pts[i].direct, splats, br.trace_s, br.gather_s,
                            br.direct_s, br.bake_s, br.bake_mib, br.frame_s, 1.0 / br.frame_s, p->frame, m.rel_mse,
-                           m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels, noise);
+                           m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels, noise, pts[i].spacing,
+                           br.sample_points);
         t.rows++;
         sg_verify__log(c, "  %-21s photons %8zu k %3zu direct %3d: bake %.2f s (trace %.2f, gather %.2f), relMSE %.5f "
                           "energy %.4f p99 %.3f\n",

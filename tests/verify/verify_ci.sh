@@ -65,7 +65,7 @@ awk -F, 'NR > 1 && $24 != "-" && $23 == "" { print "no energy against the clean 
 [ -s "$OUT/stability.md" ] || fail "no stability.md"
 
 # Sweeps: the --ci plan (src/verify/sweeps.c): 4 surface configurations x
-# 2 renderers, 6 bakes, 2 sizes, 1 headline model.
+# 2 renderers, 7 bakes, 2 sizes, 1 headline model.
 check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise" "1,2,7"
 [ "$(rows "$OUT/surfaces.csv")" -eq 8 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 8"
 for c in mls mls_no_refinements disk disk_r1.5; do
@@ -73,8 +73,8 @@ for c in mls mls_no_refinements disk disk_r1.5; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
 done
-check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise" "1"
-[ "$(rows "$OUT/bake.csv")" -eq 6 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 6"
+check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points" "1"
+[ "$(rows "$OUT/bake.csv")" -eq 7 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 7"
 check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
 [ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
 check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise" "1"
