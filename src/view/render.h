@@ -11,8 +11,11 @@
  * sharing one kd-tree traversal per model (sg_world_intersect4):
  * measured 1.02-1.13x less CPU per frame than one ray at a time
  * (bench/bench_view_split, dragon 125k and 1M, 512 x 512).
- * What it does NOT do: glossy lobes (the bake has no directional bins
- * yet), anti-aliasing, display transforms (display/ocio.h).
+ * sg_bake_render stays the plain one-ray-at-a-time loop on purpose: it is
+ * the reference this frame is tested against (as a scalar kernel beside a
+ * SIMD one).
+ * What it does NOT do: anti-aliasing, display transforms (display/ocio.h).
+ * Glossy models look up the bake's directional bins like every lookup.
  *
  * Layout of out: sg_image (io/image.h), RGB float, row 0 top.
  * Ownership: *out is allocated here (sg_image_free); written only on SG_OK.

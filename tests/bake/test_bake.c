@@ -16,19 +16,6 @@
 #include "ref/pathtrace.h"
 #include "render/world.h"
 
-static sg_world *world_from_json(const char *json)
-{
-    sg_scene_file sf;
-    sg_error err = {0};
-    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
-        fail_msg("scene: %s", err.message);
-    sg_world *w = NULL;
-    if (sg_world_create(&sf, &w, &err) != SG_OK)
-        fail_msg("world: %s", err.message);
-    sg_scene_file_free(&sf);
-    return w;
-}
-
 static sg_bake *bake(const sg_world *w, size_t photons, int depth, unsigned k)
 {
     sg_bake_desc d = {.photons = {.count = photons, .max_depth = depth, .seed = 5}, .gather = {.k = k}};
@@ -64,7 +51,7 @@ static sg_camera camera(sg_vec3 eye, sg_vec3 look, float fov)
 static void test_bake_white_furnace(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json(
+    sg_world *w = sg_test_world_from_json(
         "{\"models\":[{\"builtin\":\"sphere\",\"points\":30000,\"transform\":{\"translate\":[0,1,0]},"
         "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false}},"
         "{\"builtin\":\"ground\",\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false}}],"
@@ -100,7 +87,7 @@ static void test_bake_white_furnace(void **state)
 static void test_bake_matches_reference(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":30000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":30000,"
                                   "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"albedo\":[0.7,0.7,0.7],"
                                   "\"use_point_colors\":false}},{\"builtin\":\"ground\",\"material\":"
                                   "{\"albedo\":[0.5,0.5,0.5],\"use_point_colors\":false}}],"
@@ -160,7 +147,7 @@ static void test_bake_matches_reference_real_map(void **state)
              "{\"albedo\":[0.5,0.5,0.5],\"use_point_colors\":false}}],"
              "\"envmap\":{\"path\":\"%s\",\"rotation_deg\":30}}",
              map);
-    sg_world *w = world_from_json(json);
+    sg_world *w = sg_test_world_from_json(json);
     sg_camera cam = camera(sg_v3(0, 4.0f, 4.0f), sg_v3(0, 0.5f, 0), 40.0f);
     sg_bake *b = bake(w, 1600000, 8, 256);
     sg_bake_frame_desc fd = {.camera = cam, .width = 32, .height = 32};
@@ -245,7 +232,7 @@ static void compare_with_reference(const sg_bake *b, const sg_world *w, const sg
 static void test_bake_glossy_matches_reference(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json(
+    sg_world *w = sg_test_world_from_json(
         "{\"models\":[{\"builtin\":\"sphere\",\"points\":30000,\"transform\":{\"translate\":[0,1,0]},"
         "\"material\":{\"type\":\"ggx\",\"roughness\":0.3,\"specular\":0.3,\"albedo\":[0.7,0.7,0.7],"
         "\"use_point_colors\":false}},{\"builtin\":\"ground\",\"material\":{\"albedo\":[0.5,0.5,0.5],"
@@ -312,7 +299,7 @@ static double ggx_albedo(const sg_material *lobe, float cos_o)
 static void test_bake_glossy_white_furnace_and_lookup(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json(
+    sg_world *w = sg_test_world_from_json(
         "{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,\"material\":{\"type\":\"ggx\","
         "\"roughness\":0.3,\"specular\":1,\"albedo\":[1,1,1],\"use_point_colors\":false}}],"
         "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
@@ -447,7 +434,7 @@ static void test_bake_deterministic_across_threads(void **state)
     (void)state;
     /* A glossy sphere, so that the sample points, their refinement and the
      * glossy bins are all covered. */
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":10000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":10000,"
                                   "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"type\":\"ggx\","
                                   "\"roughness\":0.4,\"specular\":0.3}},{\"builtin\":\"ground\"}],"
                                   "\"envmap\":{\"builtin\":\"sunsky\"}}");

@@ -36,19 +36,6 @@ static const char *tmp_path(const char *name)
     return p;
 }
 
-static sg_world *world_from_json(const char *json)
-{
-    sg_scene_file sf;
-    sg_error err = {0};
-    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
-        fail_msg("scene: %s", err.message);
-    sg_world *w = NULL;
-    if (sg_world_create(&sf, &w, &err) != SG_OK)
-        fail_msg("world: %s", err.message);
-    sg_scene_file_free(&sf);
-    return w;
-}
-
 /* A sphere of `sphere_points` splats over a ground of 3000. */
 static sg_world *small_world(int sphere_points)
 {
@@ -57,7 +44,7 @@ static sg_world *small_world(int sphere_points)
              "{\"models\":[{\"builtin\":\"sphere\",\"points\":%d,\"transform\":{\"translate\":[0,1,0]}},"
              "{\"builtin\":\"ground\",\"points\":3000}],\"envmap\":{\"builtin\":\"sky\"}}",
              sphere_points);
-    return world_from_json(json);
+    return sg_test_world_from_json(json);
 }
 
 static sg_bake_desc bake_desc(size_t photons)
@@ -276,7 +263,7 @@ static void test_bake_io_splat_count_mismatch(void **state)
     char msg[256];
     snprintf(msg, sizeof msg, "%s: model 0 has %zu splats in the bake, %zu in the scene", path, have, want);
     expect_load_fails(path, w2, SCENE_HASH, SG_ERR_INVALID_ARG, msg);
-    sg_world *one = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":3000}]}");
+    sg_world *one = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":3000}]}");
     snprintf(msg, sizeof msg, "%s: 2 models in the bake, 1 in the scene", path);
     expect_load_fails(path, one, SCENE_HASH, SG_ERR_INVALID_ARG, msg);
     sg_world_destroy(one);
@@ -343,7 +330,7 @@ static void test_bake_io_bad_values(void **state)
 /* A GGX sphere over a ground: the glossy sections are written. */
 static sg_world *glossy_world(void)
 {
-    return world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,\"transform\":{\"translate\":"
+    return sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,\"transform\":{\"translate\":"
                            "[0,1,0]},\"material\":{\"type\":\"ggx\",\"roughness\":0.3,\"specular\":0.3}},"
                            "{\"builtin\":\"ground\",\"points\":3000}],\"envmap\":{\"builtin\":\"sunsky\"}}");
 }

@@ -21,19 +21,6 @@
 #include "core/alloc.h"
 #include "render/world.h"
 
-static sg_world *world_from_json(const char *json)
-{
-    sg_scene_file sf;
-    sg_error err = {0};
-    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
-        fail_msg("scene: %s", err.message);
-    sg_world *w = NULL;
-    if (sg_world_create(&sf, &w, &err) != SG_OK)
-        fail_msg("world: %s", err.message);
-    sg_scene_file_free(&sf);
-    return w;
-}
-
 static const float COS = 0.7f;
 
 static float d2(const sg_pointset *ps, size_t a, size_t b)
@@ -67,7 +54,7 @@ static void check_spacing_and_coverage(const sg_pointset *ps, const sg_sample_se
 static void test_samples_thin_spacing_coverage_determinism(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":12000}]}");
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":12000}]}");
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
     float med;
     assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
@@ -93,7 +80,7 @@ static void test_samples_thin_spacing_coverage_determinism(void **state)
 static void test_samples_refine_follows_a_step(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
     float med;
     assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
@@ -147,7 +134,7 @@ static void test_samples_refine_follows_a_step(void **state)
 static void test_samples_interpolate(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
     float med;
     assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
@@ -204,7 +191,7 @@ static void test_samples_interpolate(void **state)
 static void test_samples_nearest(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}]}");
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}]}");
     const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
     float med;
     assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);

@@ -19,19 +19,6 @@
 
 static const float PI = 3.14159265358979f;
 
-static sg_world *world_from_json(const char *json)
-{
-    sg_scene_file sf;
-    sg_error err = {0};
-    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
-        fail_msg("scene: %s", err.message);
-    sg_world *w = NULL;
-    if (sg_world_create(&sf, &w, &err) != SG_OK)
-        fail_msg("world: %s", err.message);
-    sg_scene_file_free(&sf);
-    return w;
-}
-
 static sg_ref_desc desc_look(sg_vec3 eye, sg_vec3 look, float fov, int size, int spp, int max_depth)
 {
     sg_ref_desc d = {.width = size, .height = size, .spp = spp, .max_depth = max_depth, .seed = 7};
@@ -77,7 +64,7 @@ static void check_furnace(const char *model)
              "\"surface\":{\"model\":\"%s\"}}],"
              "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}",
              model, model);
-    sg_world *w = world_from_json(json);
+    sg_world *w = sg_test_world_from_json(json);
     sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 16, 1024);
     sg_ref_result r;
     assert_int_equal(sg_ref_render(w, &d, &r, NULL), SG_OK);
@@ -94,7 +81,7 @@ static void test_ref_white_furnace_disk(void **state) { (void)state; check_furna
 static void test_ref_convex_sphere_albedo(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
                                   "\"material\":{\"albedo\":[0.5,0.25,0.8],\"use_point_colors\":false}}],"
                                   "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[2,2,2]}}");
     sg_ref_desc d = desc_look(sg_v3(0, 0, 3.0f), sg_v3(0, 0, 0), 12.0f, 16, 16, 8);
@@ -117,7 +104,7 @@ static void test_ref_convex_sphere_albedo(void **state)
 static void test_ref_emitting_room(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":40000,"
                                   "\"material\":{\"albedo\":[0.5,0.5,0.5],\"use_point_colors\":false,"
                                   "\"emission\":[1,1,1]}}],"
                                   "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0,0,0]}}");
@@ -146,7 +133,7 @@ static void test_ref_diffuse_sphere_under_hdr_map(void **state)
              "\"material\":{\"albedo\":[0.6,0.6,0.6],\"use_point_colors\":false}}],"
              "\"envmap\":{\"path\":\"%s\",\"rotation_deg\":30}}",
              map);
-    sg_world *w = world_from_json(json);
+    sg_world *w = sg_test_world_from_json(json);
     sg_ref_desc d = desc_look(sg_v3(0, 0, 3.0f), sg_v3(0, 0, 0), 40.0f, 64, 1, 8);
     d.seed = 3;
     const float pts[3][2] = {{32.0f, 32.0f}, {22.0f, 26.0f}, {40.0f, 41.0f}};
@@ -184,7 +171,7 @@ static void test_ref_diffuse_sphere_under_hdr_map(void **state)
 static void test_ref_deterministic_across_threads(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
                                   "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
                                   "\"envmap\":{\"builtin\":\"sky\"}}");
     sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 4, 6);
@@ -207,7 +194,7 @@ static void test_ref_deterministic_across_threads(void **state)
 static void test_ref_variance_falls_as_one_over_n(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
                                   "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
                                   "\"envmap\":{\"builtin\":\"sky\"}}");
     const int ns[3] = {4, 16, 64};
@@ -260,7 +247,7 @@ static double inverse_normal_tail(double p) /* z with P(Z > z) = p, by bisection
 static void test_ref_per_pixel_z_test(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
                                   "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\"}],"
                                   "\"envmap\":{\"builtin\":\"sky\"}}");
     sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 64, 8);
@@ -291,7 +278,7 @@ static void test_ref_per_pixel_z_test(void **state)
 static void test_ref_progressive_merge_equals_single_render(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000}],"
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000}],"
                                   "\"envmap\":{\"builtin\":\"sky\"}}");
     sg_ref_desc d = desc_look(sg_v3(0, 0.5f, 3.0f), sg_v3(0, 0, 0), 40.0f, 16, 32, 6);
     sg_ref_result whole, a, b;

@@ -7,6 +7,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "io/scene_file.h"
+#include "render/world.h"
+
 const char *sg_test_tmpdir(void)
 {
     static char dir[512];
@@ -46,4 +49,17 @@ float sg_test_rand01(uint64_t *state)
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     z ^= z >> 31;
     return (float)(z >> 40) * (1.0f / 16777216.0f);
+}
+
+struct sg_world *sg_test_world_from_json(const char *json)
+{
+    sg_scene_file sf;
+    sg_error err = {0};
+    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
+        fail_msg("scene: %s", err.message);
+    sg_world *w = NULL;
+    if (sg_world_create(&sf, &w, &err) != SG_OK)
+        fail_msg("world: %s", err.message);
+    sg_scene_file_free(&sf);
+    return w;
 }

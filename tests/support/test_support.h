@@ -23,6 +23,12 @@ const char *sg_test_tmpdir(void);
  * saying the test is skipped) when the folder or file is absent. */
 const char *sg_test_shared_data(const char *relpath);
 
+/* The world of a scene given as JSON text (relative paths against the
+ * working directory); fails the test with the library's message when the
+ * scene or the world cannot be made. Free with sg_world_destroy. */
+struct sg_world;
+struct sg_world *sg_test_world_from_json(const char *json);
+
 /* Deterministic uniform float in [0,1) from a 64-bit state (splitmix64). */
 float sg_test_rand01(uint64_t *state);
 

@@ -19,19 +19,6 @@ static const char SCENE[] =
     "{\"builtin\":\"ground\",\"material\":{\"albedo\":[0.5,0.5,0.5],\"use_point_colors\":false}}],"
     "\"envmap\":{\"builtin\":\"sky\"}}";
 
-static sg_world *world_from_json(const char *json)
-{
-    sg_scene_file sf;
-    sg_error err = {0};
-    if (sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err) != SG_OK)
-        fail_msg("scene: %s", err.message);
-    sg_world *w = NULL;
-    if (sg_world_create(&sf, &w, &err) != SG_OK)
-        fail_msg("world: %s", err.message);
-    sg_scene_file_free(&sf);
-    return w;
-}
-
 static sg_camera camera(sg_vec3 eye, sg_vec3 look, float aspect)
 {
     sg_camera c;
@@ -45,7 +32,7 @@ static sg_camera camera(sg_vec3 eye, sg_vec3 look, float aspect)
 static void test_view_render_matches_bake_render(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json(SCENE);
+    sg_world *w = sg_test_world_from_json(SCENE);
     sg_bake_desc bd = {.photons = {.count = 20000, .seed = 3}, .direct_samples = 2};
     sg_bake *b = NULL;
     sg_error err = {0};
@@ -73,7 +60,7 @@ static void test_view_render_matches_bake_render(void **state)
             sg_image_free(&img);
         }
     /* A bake of another world is refused. */
-    sg_world *other = world_from_json("{\"models\":[{\"builtin\":\"ground\"}],\"envmap\":{\"builtin\":\"sky\"}}");
+    sg_world *other = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\"}],\"envmap\":{\"builtin\":\"sky\"}}");
     sg_bake_frame_desc fd = {.camera = camera(eyes[0], sg_v3(0, 0.8f, 0), 1.0f), .width = 8, .height = 8};
     sg_image img = {0};
     assert_int_equal(sg_view_render(b, other, &fd, &img, NULL, &err), SG_ERR_INVALID_ARG);
@@ -90,7 +77,7 @@ static void test_view_render_matches_bake_render(void **state)
 static void test_world_intersect4_matches_single(void **state)
 {
     (void)state;
-    sg_world *w = world_from_json(SCENE);
+    sg_world *w = sg_test_world_from_json(SCENE);
     uint64_t rng = 11;
     int hits[2] = {0, 0};
     for (int i = 0; i < 3000; ++i) {
