@@ -184,6 +184,55 @@ static void test_bake_matches_reference_real_map(void **state)
     sg_world_destroy(w);
 }
 
+/* The envmap's intensity and rotation reach the bake (two failures users
+ * report of bakers). A sphere alone under the sun-and-sky map:
+ *  - intensity 2 doubles every splat's irradiance: the map's texels are
+ *    scaled at creation, its sampling pdf is not, so every photon flux,
+ *    shadow-ray term and table entry doubles exactly (powers of two);
+ *    1e-5 relative allows for nothing but float rounding of the sum;
+ *  - rotation 180 degrees about +Y turns the light with it: the
+ *    irradiance-weighted mean normal sum E_i n_i (pointing at the sun's
+ *    side) has its x and z flipped. A bake that ignored the rotation would
+ *    give the same vector twice (dot product > 0); the bound asks for the
+ *    rotated vector to lie within 10 degrees of the flipped one, the
+ *    photons' and shadow rays' noise on 4000 splats being far smaller. */
+static void test_bake_envmap_intensity_and_rotation(void **state)
+{
+    (void)state;
+    const char *fmt = "{\"models\":[{\"builtin\":\"sphere\",\"points\":4000,\"material\":{\"albedo\":[0.6,0.6,0.6],"
+                      "\"use_point_colors\":false}}],\"envmap\":{\"builtin\":\"sunsky\",\"intensity\":%g,"
+                      "\"rotation_deg\":%g}}";
+    const double cfg[3][2] = {{1, 0}, {2, 0}, {1, 180}};
+    double sum[3] = {0}, vx[3] = {0}, vz[3] = {0};
+    for (int c = 0; c < 3; ++c) {
+        char json[512];
+        snprintf(json, sizeof json, fmt, cfg[c][0], cfg[c][1]);
+        sg_world *w = sg_test_world_from_json(json);
+        sg_bake *b = bake(w, 100000, 4, 32);
+        size_t n;
+        const float *E = sg_bake_irradiance_data(b, 0, &n);
+        const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+        for (size_t i = 0; i < n; ++i) {
+            sg_vec3 nrm = sg_pointset_normal(ps, i);
+            sum[c] += E[3 * i + 1];
+            vx[c] += E[3 * i + 1] * nrm.x;
+            vz[c] += E[3 * i + 1] * nrm.z;
+        }
+        sg_bake_destroy(b);
+        sg_world_destroy(w);
+    }
+    double ratio = sum[1] / sum[0];
+    fprintf(stderr, "intensity 2 / 1: %.7f; mean normal (x, z): (%.4g, %.4g) turned 180 deg: (%.4g, %.4g)\n", ratio,
+            vx[0], vz[0], vx[2], vz[2]);
+    if (!(fabs(ratio - 2.0) <= 2e-5))
+        fail_msg("intensity 2 scales the bake by %.7f, not 2", ratio);
+    double len0 = hypot(vx[0], vz[0]), len2 = hypot(vx[2], vz[2]);
+    assert_true(len0 > 0.0 && len2 > 0.0);
+    double cosang = -(vx[0] * vx[2] + vz[0] * vz[2]) / (len0 * len2);
+    if (!(cosang >= cos(10.0 * 3.14159265358979 / 180.0)))
+        fail_msg("rotation 180: the lit side turned by acos(%.4f) from the expected direction", cosang);
+}
+
 /* relMSE and mean-energy ratio of a frame (green channel) against the
  * reference at the same pixel centres, 256 paths each. lookup: 1 the
  * bake's lookup, 0 the diffuse-only lookup the bake had before glossy
@@ -484,6 +533,7 @@ int main(void)
         cmocka_unit_test(test_bake_white_furnace),
         cmocka_unit_test(test_bake_matches_reference),
         cmocka_unit_test(test_bake_matches_reference_real_map),
+        cmocka_unit_test(test_bake_envmap_intensity_and_rotation),
         cmocka_unit_test(test_bake_glossy_matches_reference),
         cmocka_unit_test(test_bake_glossy_white_furnace_and_lookup),
         cmocka_unit_test(test_bake_deterministic_across_threads),
