@@ -21,7 +21,9 @@
  *                                the scene file's folder     (exactly one of
  *         "builtin": "bunny",    "bunny" | "ground" | "sphere" path, builtin)
  *         "points": 250000,      mesh samples, integer [1, 1e9]; absent = 0 =
- *                                the loader's default (250000 for meshes)
+ *                                the loader's default (250000 for meshes);
+ *                                "ground": a jittered grid of round(sqrt(
+ *                                points)) per side (2..20000; default 300)
  *         "radius_k": 8,         splat radius from the k-th neighbour [1, 64]
  *         "radius_scale": 1.0,   radius multiplier (0, 100]
  *         "transform": {

@@ -41,7 +41,15 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
         break;
     }
     case SG_SCENE_MODEL_GROUND: {
-        sg_plane_points_desc d = {.radius_k = m->points.radius_k, .radius_scale = m->points.radius_scale};
+        /* "points" asks for about that many: a jittered grid of
+         * round(sqrt(points)) per side (at least 2); 0 = the default 300. */
+        int side = 0;
+        if (m->points.points > 0) {
+            double r = floor(sqrt((double)m->points.points) + 0.5);
+            side = r < 2.0 ? 2 : r > 20000.0 ? 20000 : (int)r;
+        }
+        sg_plane_points_desc d = {.side = side, .radius_k = m->points.radius_k,
+                                  .radius_scale = m->points.radius_scale};
         st = sg_points_make_plane(&d, out, err);
         break;
     }

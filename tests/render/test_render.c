@@ -23,6 +23,7 @@
 #include "points/pointset.h"
 #include "render/camera.h"
 #include "render/render.h"
+#include "render/world.h"
 #include "surface/scene.h"
 
 /* ---- a small test scene: unit sphere resting on a square plane --------- */
@@ -322,6 +323,25 @@ static void test_render_missing_folder(void **state)
     sg_image_free(&img);
 }
 
+/* The builtin ground honours "points": a grid of round(sqrt(points)) per
+ * side (it used to ignore it and always make 300 x 300); absent, 300 x 300. */
+static void test_world_ground_points(void **state)
+{
+    (void)state;
+    const char *json[] = {"{\"models\":[{\"builtin\":\"ground\",\"points\":2500}]}",
+                          "{\"models\":[{\"builtin\":\"ground\",\"points\":3000}]}",
+                          "{\"models\":[{\"builtin\":\"ground\",\"points\":1}]}",
+                          "{\"models\":[{\"builtin\":\"ground\"}]}"};
+    const size_t want[] = {2500, 55 * 55, 4, 90000};
+    for (int i = 0; i < 4; ++i) {
+        sg_world *w = sg_test_world_from_json(json[i]);
+        size_t n = sg_scene_points(sg_world_scene(w, 0))->count;
+        if (n != want[i])
+            fail_msg("%s: %zu splats, want %zu", json[i], n, want[i]);
+        sg_world_destroy(w);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -330,6 +350,7 @@ int main(void)
         cmocka_unit_test(test_render_exr_roundtrip),
         cmocka_unit_test(test_render_png_written),
         cmocka_unit_test(test_render_missing_folder),
+        cmocka_unit_test(test_world_ground_points),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
