@@ -63,13 +63,13 @@ fi
 csv="$dir/bake.csv"
 if [ -f "$csv" ]; then
   # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse,
-  # 19 spacing, 20 sample points
+  # 19 spacing, 20 sample points, 21 glossy, 22 glossy_res, 23 glossy_rays
   plots=()
-  colours=("#1f6fb4" "#d62728" "#2ca02c" "#9467bd" "#ff7f0e")
+  colours=("#1f6fb4" "#d62728" "#2ca02c" "#9467bd" "#ff7f0e" "#8c564b" "#e377c2")
   i=0
-  for sw in photons photons_carry_direct k direct spacing; do
+  for sw in photons photons_carry_direct k direct spacing glossy_res glossy_rays; do
     f="$tmpd/b_$sw"
-    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : (s == "spacing" ? ($19 < 0 ? "all" : sprintf("s=%g", $19)) : "S=" $4)); print $9, $14, lab }' "$csv" | sort -n >"$f"
+    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : (s == "spacing" ? ($19 < 0 ? "all" : sprintf("s=%g", $19)) : (s == "glossy_res" ? ($22 == 0 ? "R=auto" : "R=" $22) : (s == "glossy_rays" ? "M=" $23 : "S=" $4)))); print $9, $14, lab }' "$csv" | sort -n >"$f"
     [ -s "$f" ] || continue
     c="${colours[$i]}"
     case "$sw" in
@@ -78,6 +78,8 @@ if [ -f "$csv" ]; then
       k) t="gather k ($(awk -F, 'NR > 1 && $1 == "k" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
       direct) t="direct-light samples S ($(awk -F, 'NR > 1 && $1 == "direct" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
       spacing) t="sample-point spacing (x median splat radius; default 4 is on the photon curve)";;
+      glossy_res) t="glossy model (GGX, roughness 0.3): bins per side R (auto = 27), own reference";;
+      glossy_rays) t="glossy model: rays per glossy sample point M (default 128 = R=auto)";;
     esac
     plots+=("\"$f\" u 1:2 w linespoints lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
     plots+=("\"$f\" u 1:2:3 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")

@@ -73,7 +73,7 @@ for c in mls mls_no_refinements disk disk_r1.5; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
 done
-check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points" "1"
+check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points,glossy,glossy_res,glossy_rays" "1"
 [ "$(rows "$OUT/bake.csv")" -eq 7 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 7"
 check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
 [ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
