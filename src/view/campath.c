@@ -152,7 +152,7 @@ static const char *campath__parse_line(const char *s, size_t len, sg_campath_key
             errno = 0;
             double x = strtod(num, &end);
             if (end == num || *end || errno == ERANGE) {
-                snprintf(buf, bufsize, "number %d: '%s' is not a number", got + 1, num);
+                snprintf(buf, bufsize, "number %d: '%.64s' is not a number", got + 1, num);
                 return buf;
             }
             v[got] = x;
