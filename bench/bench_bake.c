@@ -206,21 +206,7 @@ typedef struct centre_info {
     char path[4096];
 } centre_info;
 
-static int fail(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
-static int fail(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "bench_bake: ");
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, "\n");
-    va_end(ap);
-    return 1;
-}
+#define fail(...) bench_fail("bench_bake", __VA_ARGS__) /* bench_common.h */
 
 /* ---- options --------------------------------------------------------- */
 
@@ -529,23 +515,13 @@ typedef struct scene_setup {
 
 static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
 {
-    sg_mesh m = {0};
-    sg_status st = sg_mesh_read(o->mesh, &m, err);
+    bench_placement pl;
+    sg_status st = bench_place_mesh(o->mesh, SCENE_LENGTH, &pl, err);
     if (st != SG_OK)
         return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
-    sg_mesh_free(&m);
-    sg_vec3 ext = sg_v3_sub(b.hi, b.lo);
-    float longest = fmaxf(ext.x, fmaxf(ext.y, ext.z));
-    if (!(longest > 0.0f))
-        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: empty or degenerate bounds", o->mesh);
-    s->scale = SCENE_LENGTH / longest;
-    s->translate = sg_v3(-s->scale * 0.5f * (b.lo.x + b.hi.x), -s->scale * b.lo.y,
-                         -s->scale * 0.5f * (b.lo.z + b.hi.z));
-    s->world_box.lo = sg_v3_add(sg_v3_scale(b.lo, s->scale), s->translate);
-    s->world_box.hi = sg_v3_add(sg_v3_scale(b.hi, s->scale), s->translate);
+    s->scale = pl.scale;
+    s->translate = pl.translate;
+    s->world_box = pl.world_box;
     s->have_envmap = access(o->envmap, R_OK) == 0;
     return sg_camera_frame(s->world_box, sg_v3(view_dir[0], view_dir[1], view_dir[2]), sg_v3(0, 1, 0), FOV_DEG,
                            1.0f, FRAME_MARGIN, &s->camera, err);

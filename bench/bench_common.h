@@ -1,12 +1,24 @@
 /* bench_common.h — scaffolding the benchmark programs share: the machine
  * line, output folders, files written whole (temporary name, then
- * rename), JSON strings, and a cache key over a file's contents. */
+ * rename), JSON strings, a cache key over a file's contents, and where a
+ * scanned mesh is placed in the benchmark scenes. */
 #ifndef SG_BENCH_COMMON_H
 #define SG_BENCH_COMMON_H
 
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+
+#include "core/error.h"
+#include "math/vec3.h"
+
+/* "prog: message" on stderr; returns 1, the programs' failure value
+ * (so `return bench_fail(...)` ends main). */
+int bench_fail(const char *prog, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 
 /* The CPU model from /proc/cpuinfo ("unknown" if absent). */
 void bench_cpu_model(char *out, size_t cap);
@@ -26,5 +38,17 @@ int bench_json_escape(const char *s, char *out, size_t cap);
 /* Mixes the size and modification time of the file at path into key (a
  * cache key). */
 uint64_t bench_mix_file(uint64_t key, const char *path);
+
+/* Where the benchmarks put a scanned mesh: scaled to `length` world units
+ * along its longest side, centred in x and z, standing on y = 0 (the
+ * builtin ground). p' = translate + scale p; world_box is the mesh's box
+ * after that. SG_ERR_INVALID_ARG for an empty or degenerate mesh; the
+ * mesh reader's errors otherwise. */
+typedef struct bench_placement {
+    float scale;
+    sg_vec3 translate;
+    sg_aabb world_box;
+} bench_placement;
+sg_status bench_place_mesh(const char *mesh_path, float length, bench_placement *out, sg_error *err);
 
 #endif

@@ -109,21 +109,7 @@ typedef struct row {
     double embree_build_s, embree_mrays_s, ratio, agreement;
 } row;
 
-static int fail(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
-static int fail(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "bench_trace: ");
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, "\n");
-    va_end(ap);
-    return 1;
-}
+#define fail(...) bench_fail("bench_trace", __VA_ARGS__) /* bench_common.h */
 
 /* ---- options --------------------------------------------------------- */
 
