@@ -15,26 +15,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-build="${SG_BENCH_BUILD_DIR:-build-bench}"
-
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSG_BUILD_BENCH=ON >/dev/null
-cmake --build "$build" -j "$(nproc)" --target bench_bake
-
-outdir=docs
-args=("$@")
-for ((i = 0; i < ${#args[@]}; i++)); do
-  case "${args[$i]}" in
-    --quick) outdir=out ;;
-    --help) exec "$build/bench/bench_bake" --help ;;
-  esac
-done
-for ((i = 0; i < ${#args[@]}; i++)); do
-  if [ "${args[$i]}" = "--out-dir" ] && [ $((i + 1)) -lt ${#args[@]} ]; then
-    outdir="${args[$((i + 1))]}"
-  fi
-done
-mkdir -p "$outdir"
-"$build/bench/bench_bake" --out-dir "$outdir" "$@"
+. scripts/bench-lib.sh
+bench_run bench_bake "$@"
 
 csv="$outdir/bench_bake.csv"
 png="$outdir/bake_error_time.png"
@@ -43,11 +25,7 @@ if ! command -v gnuplot >/dev/null; then
   echo "bench-bake: gnuplot not found: no chart (install gnuplot-nox)"
   exit 0
 fi
-if gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1; then
-  term='pngcairo size 1100,800 enhanced font "sans,11"'
-else
-  term='png size 1100,800'
-fi
+bench_term 1100 800
 
 # Columns of bench_bake.csv (bench_bake.c, write_csv): 1 kind, 2 points,
 # 4 photons, 5 k, 6 direct, 7 spp, 8 width, 16 wall_s, 18 rel_mse.

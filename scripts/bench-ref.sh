@@ -15,27 +15,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-build="${SG_BENCH_BUILD_DIR:-build-bench}"
-
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSG_BUILD_BENCH=ON >/dev/null
-cmake --build "$build" -j "$(nproc)" --target bench_ref
-
-outdir=docs
-args=("$@")
-for ((i = 0; i < ${#args[@]}; i++)); do
-  case "${args[$i]}" in
-    --quick) outdir=out ;;
-    --help) exec "$build/bench/bench_ref" --help ;;
-  esac
-done
-# A later --out-dir wins over the default chosen above.
-for ((i = 0; i < ${#args[@]}; i++)); do
-  if [ "${args[$i]}" = "--out-dir" ] && [ $((i + 1)) -lt ${#args[@]} ]; then
-    outdir="${args[$((i + 1))]}"
-  fi
-done
-mkdir -p "$outdir"
-"$build/bench/bench_ref" --out-dir "$outdir" "$@"
+. scripts/bench-lib.sh
+bench_run bench_ref "$@"
 
 csv="$outdir/ref_error_time.csv"
 png="$outdir/ref_error_time.png"
@@ -44,12 +25,7 @@ if ! command -v gnuplot >/dev/null; then
   echo "bench-ref: gnuplot not found: no chart (install gnuplot-nox)"
   exit 0
 fi
-# pngcairo draws smoother text and dashes; plain png (libgd) is the fallback.
-if gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1; then
-  term='pngcairo size 960,640 enhanced font "sans,11"'
-else
-  term='png size 960,640'
-fi
+bench_term 960 640
 # Columns of the CSV (bench_ref.c, write_curve_csv): 1 spp, 3 seconds,
 # 4 rel_mse, 5 rel_mse_predicted, 10 ref_size, 11 ref_spp, 12 ideal_rel_mse,
 # 13 ref_noise_rel_mse, 14 points, 17 envmap.

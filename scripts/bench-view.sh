@@ -14,23 +14,5 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-build="${SG_BENCH_BUILD_DIR:-build-bench}"
-
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSG_BUILD_BENCH=ON >/dev/null
-cmake --build "$build" -j "$(nproc)" --target bench_view
-
-outdir=docs
-args=("$@")
-for ((i = 0; i < ${#args[@]}; i++)); do
-  case "${args[$i]}" in
-    --quick) outdir=out ;;
-    --help) exec "$build/bench/bench_view" --help ;;
-  esac
-done
-for ((i = 0; i < ${#args[@]}; i++)); do
-  if [ "${args[$i]}" = "--out-dir" ] && [ $((i + 1)) -lt ${#args[@]} ]; then
-    outdir="${args[$((i + 1))]}"
-  fi
-done
-mkdir -p "$outdir"
-exec "$build/bench/bench_view" --out-dir "$outdir" "$@"
+. scripts/bench-lib.sh
+bench_run bench_view "$@"
