@@ -122,8 +122,9 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * same parameters start giving other values, so that a bake file made by
  * an older splatgi counts as made with other parameters (and
  * splatgi-bake --if-stale bakes again). 2: sparse direct light as a
- * visibility ratio times the tabulated unshadowed irradiance. */
-#define SG_BAKE_ALGORITHM 2u
+ * visibility ratio times the tabulated unshadowed irradiance; 3: bright
+ * texels of the table must also stand out from the mean. */
+#define SG_BAKE_ALGORITHM 3u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

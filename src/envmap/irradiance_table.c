@@ -21,6 +21,7 @@ static const double PI = 3.14159265358979323846;
 
 enum { MAX_BRIGHT = 1024 };
 static const double BRIGHT_SHARE = 1e-4;
+static const double BRIGHT_OVER_MEAN = 64.0; /* x the mean texel's power */
 
 /* Luminance of texel (i, j) of a W x H map, read through the public
  * mapping (rotation included both ways, so it is the stored texel). */
@@ -77,7 +78,8 @@ sg_status sg_irradiance_table_create(const sg_envmap *m, const sg_irradiance_tab
      * lights: in a cell their direction would move by up to a degree, and
      * interpolating between normals would round the kink of their clamped
      * cosine, errors of several percent near a low sun. A texel is bright
-     * when its power exceeds BRIGHT_SHARE of the map's, at most
+     * when its power exceeds BRIGHT_SHARE of the map's and BRIGHT_OVER_MEAN
+     * times the mean texel's, at most
      * MAX_BRIGHT of them (the threshold doubles until they fit). */
     double total = 0.0;
     for (int j = 0; j < H; ++j) {
@@ -85,7 +87,10 @@ sg_status sg_irradiance_table_create(const sg_envmap *m, const sg_irradiance_tab
         for (int i = 0; i < W; ++i)
             total += texel_lum(m, i, j, W, H) * dom;
     }
-    double threshold = BRIGHT_SHARE * total;
+    /* Bright means an outlier as well: on a small smooth map every texel
+     * may hold 1e-4 of the power, and summing them all exactly would only
+     * slow eval down. */
+    double threshold = fmax(BRIGHT_SHARE * total, BRIGHT_OVER_MEAN * total / ((double)W * (double)H));
     int bright_cap = 0; /* entries allocated in bright_w, bright_p */
     for (;;) {
         int count = 0;

@@ -18,8 +18,8 @@
  * by E0 at the splat's own normal removes that error; E0 must then be
  * accurate, since it scales the result directly.
  *
- * Bright texels: those holding more than 1e-4 of the map's power (at most
- * 1024: a sun) are left out of the cells and summed exactly at eval, as
+ * Bright texels: those holding more than 1e-4 of the map's power and 64
+ * times a mean texel's (at most 1024: a sun) are left out of the cells and summed exactly at eval, as
  * directional lights: in a cell a sun's direction would move by up to a
  * degree, and interpolating between normals would round the kink of its
  * clamped cosine (errors of several percent at a ground plane's normal
