@@ -23,8 +23,15 @@
  *   (4) because each subtree is a pure function of (primitives, cell, depth)
  *   and flatten() walks the finished tree depth-first in one thread.
  *
- * The temporary build tree uses one small allocation per node; it is
- * flattened into the compact arrays and freed before returning.
+ * Build-time memory. The shrink hook empties most of the small cells the
+ * SAH creates (on scanned models about 19 build nodes per splat, 2 of which
+ * survive the collapse), so a split whose two children both ended up empty
+ * is collapsed as soon as both are built, not after the whole tree: the live
+ * build tree stays near the size of the final one. Build nodes and leaf id
+ * lists come from per-thread arenas (bump allocation in large blocks, freed
+ * together), and small partitions live on the stack, so the build makes a
+ * few hundred allocations instead of several per splat. The tree is then
+ * flattened into the compact arrays and the arenas are freed.
  */
 #include "accel/kdtree.h"
 
@@ -33,35 +40,122 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <omp.h>
+
 #include "core/alloc.h"
 
 enum {
     BIN_COUNT = 32,          /* bins per axis for the binned SAH                 */
     EXACT_SAH_MAX = 128,     /* at or below this many primitives, test every edge */
     TASK_MIN_PRIMS = 4096,   /* spawn an OpenMP task for subtrees this large     */
+    STACK_PRIMS = 256,       /* partitions of up to this many ids stay on the stack */
     DEFAULT_MAX_DEPTH = 48
 };
+
+/* Arena blocks: large enough that a 24M-splat build needs a few thousand. */
+static const size_t ARENA_BLOCK_BYTES = (size_t)1 << 20;
 
 /* Wald's empty-space bonus: a split that cuts off an empty slab is worth a
  * little more than its SAH cost says, because empty space is free to skip. */
 static const float EMPTY_BONUS = 0.8f;
 
+/* A node of the temporary build tree (40 bytes). */
 typedef struct bnode {
-    struct bnode *child[2]; /* inner: left (below plane), right              */
-    int axis;               /* 0..2 inner, 3 leaf                            */
-    float split;            /* plane position (inner)                        */
-    uint32_t *prims;        /* leaf: primitive ids (owned), NULL when empty  */
-    size_t count;           /* leaf: number of ids                           */
-    int depth;              /* depth of this node                            */
-    sg_aabb bounds;         /* leaf: the (shrunk) box holding its surface    */
+    union {
+        struct {
+            struct bnode *child[2]; /* left (below the plane), right       */
+            float split;            /* plane position                       */
+        } inner;                    /* axis 0..2                            */
+        struct {
+            uint32_t *prims;        /* ids in an arena, NULL when empty     */
+            sg_aabb bounds;         /* the (shrunk) box holding its surface */
+        } leaf;                     /* axis 3                               */
+    } u;
+    uint32_t count;                 /* leaf: number of ids                  */
+    uint8_t axis;
 } bnode;
+
+typedef struct arena_block {
+    struct arena_block *next;
+    size_t used, cap;
+    _Alignas(8) unsigned char data[];
+} arena_block;
+
+/* One per OpenMP thread: only that thread allocates from it or returns
+ * nodes to its free list (tasks are tied, so a thread runs one at a time). */
+typedef struct arena {
+    arena_block *head;
+    bnode *free_nodes; /* collapsed nodes, linked through u.inner.child[0] */
+} arena;
 
 typedef struct build_ctx {
     const sg_kdtree_desc *d;
     float cost_trav, cost_isec;
     int max_depth;
-    int failed; /* set (never cleared) when an allocation fails */
+    arena *arenas; /* one per thread of the build's parallel region */
+    int failed;    /* set (never cleared) when an allocation fails */
 } build_ctx;
+
+static void set_failed(build_ctx *c)
+{
+#pragma omp atomic write
+    c->failed = 1;
+}
+
+/* `bytes` from the calling thread's arena, 8-byte aligned; NULL (and the
+ * build marked failed) when out of memory. */
+static void *arena_alloc(build_ctx *c, size_t bytes)
+{
+    arena *a = &c->arenas[omp_get_thread_num()];
+    bytes = (bytes + 7) & ~(size_t)7;
+    arena_block *b = a->head;
+    if (!b || b->cap - b->used < bytes) {
+        size_t cap = bytes > ARENA_BLOCK_BYTES ? bytes : ARENA_BLOCK_BYTES;
+        b = sg_alloc_array(1, sizeof *b + cap);
+        if (!b) {
+            set_failed(c);
+            return NULL;
+        }
+        b->next = a->head;
+        b->used = 0;
+        b->cap = cap;
+        a->head = b;
+    }
+    void *p = b->data + b->used;
+    b->used += bytes;
+    return p;
+}
+
+/* A fresh leaf node (empty, zero box). */
+static bnode *node_alloc(build_ctx *c)
+{
+    arena *a = &c->arenas[omp_get_thread_num()];
+    bnode *b = a->free_nodes;
+    if (b)
+        a->free_nodes = b->u.inner.child[0];
+    else if (!(b = arena_alloc(c, sizeof *b)))
+        return NULL;
+    memset(b, 0, sizeof *b);
+    b->axis = 3;
+    return b;
+}
+
+static void node_release(build_ctx *c, bnode *b)
+{
+    arena *a = &c->arenas[omp_get_thread_num()];
+    b->u.inner.child[0] = a->free_nodes;
+    a->free_nodes = b;
+}
+
+static void arenas_free(arena *arenas, int count)
+{
+    for (int t = 0; arenas && t < count; ++t)
+        for (arena_block *b = arenas[t].head, *next; b; b = next) {
+            next = b->next;
+            sg_free(b);
+        }
+    sg_free(arenas);
+}
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
@@ -181,29 +275,6 @@ static split_choice find_split_exact(const build_ctx *c, const uint32_t *prims, 
     return best;
 }
 
-static bnode *new_bnode(build_ctx *c, int depth)
-{
-    bnode *b = calloc(1, sizeof *b);
-    if (!b) {
-#pragma omp atomic write
-        c->failed = 1;
-        return NULL;
-    }
-    b->axis = 3;
-    b->depth = depth;
-    return b;
-}
-
-static void free_bnode(bnode *b)
-{
-    if (!b)
-        return;
-    free_bnode(b->child[0]);
-    free_bnode(b->child[1]);
-    sg_free(b->prims);
-    free(b);
-}
-
 static int box_overlaps_cell(const sg_kdtree_desc *d, uint32_t p, sg_aabb cell)
 {
     return d->lo[0][p] <= cell.hi.x && d->hi[0][p] >= cell.lo.x &&
@@ -211,56 +282,64 @@ static int box_overlaps_cell(const sg_kdtree_desc *d, uint32_t p, sg_aabb cell)
            d->lo[2][p] <= cell.hi.z && d->hi[2][p] >= cell.lo.z;
 }
 
-/* Turns `node` into a leaf holding prims (ownership moves), shrinking the
- * cell first when a hook is given: the leaf keeps the shrunk box, which
- * traversal clips the ray against (no extra planes, no empty siblings), and
- * drops the primitives that no longer reach it. */
-static void make_leaf(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_aabb cell)
+/* Turns `node` into a leaf holding the ids prims[0..n) (copied into the
+ * arena; prims is freed when `owned`), shrinking the cell first when a hook
+ * is given: the leaf keeps the shrunk box, which traversal clips the ray
+ * against (no extra planes, no empty siblings), and drops the primitives
+ * that no longer reach it. */
+static void make_leaf(build_ctx *c, bnode *node, uint32_t *prims, size_t n, int owned, sg_aabb cell)
 {
     node->axis = 3;
-    node->bounds = cell;
-    if (n == 0 || !c->d->shrink) {
-        node->prims = n ? prims : NULL;
-        node->count = n;
-        if (!n)
-            sg_free(prims);
-        return;
+    node->u.leaf.prims = NULL;
+    node->u.leaf.bounds = cell;
+    node->count = 0;
+    size_t kept = n;
+    if (n && c->d->shrink) {
+        sg_aabb s = cell;
+        if (!c->d->shrink(c->d->shrink_user, prims, n, &s)) {
+            kept = 0;
+        } else {
+            /* Keep the shrunk cell inside the original one. */
+            s.lo = sg_v3_max(s.lo, cell.lo);
+            s.hi = sg_v3_min(s.hi, cell.hi);
+            kept = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (box_overlaps_cell(c->d, prims[i], s))
+                    prims[kept++] = prims[i];
+            node->u.leaf.bounds = s;
+        }
     }
-    sg_aabb s = cell;
-    if (!c->d->shrink(c->d->shrink_user, prims, n, &s)) {
-        sg_free(prims);
-        node->prims = NULL;
-        node->count = 0;
-        return;
+    if (kept) {
+        uint32_t *ids = arena_alloc(c, kept * sizeof *ids);
+        if (ids) {
+            memcpy(ids, prims, kept * sizeof *ids);
+            node->u.leaf.prims = ids;
+            node->count = (uint32_t)kept;
+        }
     }
-    /* Keep the shrunk cell inside the original one. */
-    s.lo = sg_v3_max(s.lo, cell.lo);
-    s.hi = sg_v3_min(s.hi, cell.hi);
-    size_t kept = 0;
-    for (size_t i = 0; i < n; ++i)
-        if (box_overlaps_cell(c->d, prims[i], s))
-            prims[kept++] = prims[i];
-    node->bounds = s;
-    node->prims = kept ? prims : NULL;
-    node->count = kept;
-    if (!kept)
+    if (owned)
         sg_free(prims);
 }
 
-static void build_rec(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_aabb cell)
+static int is_empty_leaf(const bnode *b) { return b->axis == 3 && b->count == 0; }
+
+/* Builds the subtree of `node` over prims[0..n) in `cell`. The ids are
+ * freed here when `owned` (heap arrays); otherwise they live in the
+ * caller's stack frame, which outlasts this call. */
+static void build_rec(build_ctx *c, bnode *node, uint32_t *prims, size_t n, int owned, sg_aabb cell, int depth)
 {
     int failed;
 #pragma omp atomic read
     failed = c->failed;
-    if (n == 0 || node->depth >= c->max_depth || failed) {
-        make_leaf(c, node, prims, n, cell);
+    if (n == 0 || depth >= c->max_depth || failed) {
+        make_leaf(c, node, prims, n, owned, cell);
         return;
     }
     split_choice s = n > EXACT_SAH_MAX ? find_split_binned(c, prims, n, cell)
                                        : find_split_exact(c, prims, n, cell);
     float leaf_cost = c->cost_isec * (float)n;
     if (s.axis < 0 || s.cost >= leaf_cost) {
-        make_leaf(c, node, prims, n, cell);
+        make_leaf(c, node, prims, n, owned, cell);
         return;
     }
     const float *plo = c->d->lo[s.axis], *phi = c->d->hi[s.axis];
@@ -270,20 +349,23 @@ static void build_rec(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_a
         nr += (size_t)goes_right(plo[prims[i]], phi[prims[i]], s.pos);
     }
     if (nl == n && nr == n) { /* the plane separates nothing */
-        make_leaf(c, node, prims, n, cell);
+        make_leaf(c, node, prims, n, owned, cell);
         return;
     }
-    uint32_t *left = sg_alloc_array(nl ? nl : 1, sizeof *left);
-    uint32_t *right = sg_alloc_array(nr ? nr : 1, sizeof *right);
-    bnode *cl = new_bnode(c, node->depth + 1), *cr = new_bnode(c, node->depth + 1);
+    /* Subtrees run as tasks only above TASK_MIN_PRIMS, so a stack buffer
+     * is only ever read by this thread, while this frame is alive. */
+    uint32_t stack_ids[2 * STACK_PRIMS];
+    const int heap = nl + nr > 2 * STACK_PRIMS;
+    uint32_t *left = heap ? sg_alloc_array(nl ? nl : 1, sizeof *left) : stack_ids;
+    uint32_t *right = heap ? sg_alloc_array(nr ? nr : 1, sizeof *right) : stack_ids + nl;
+    bnode *cl = node_alloc(c), *cr = node_alloc(c);
     if (!left || !right || !cl || !cr) {
-#pragma omp atomic write
-        c->failed = 1;
-        sg_free(left);
-        sg_free(right);
-        free(cl);
-        free(cr);
-        make_leaf(c, node, prims, n, cell);
+        set_failed(c);
+        if (heap) {
+            sg_free(left);
+            sg_free(right);
+        }
+        make_leaf(c, node, prims, n, owned, cell);
         return;
     }
     size_t il = 0, ir = 0;
@@ -295,57 +377,50 @@ static void build_rec(build_ctx *c, bnode *node, uint32_t *prims, size_t n, sg_a
             right[ir++] = p;
     }
     assert(il == nl && ir == nr);
-    sg_free(prims);
-    node->axis = s.axis;
-    node->split = s.pos;
-    node->child[0] = cl;
-    node->child[1] = cr;
+    if (owned)
+        sg_free(prims);
+    node->axis = (uint8_t)s.axis;
+    node->u.inner.split = s.pos;
+    node->u.inner.child[0] = cl;
+    node->u.inner.child[1] = cr;
     sg_aabb lcell = cell, rcell = cell;
     set_axis(&lcell.hi, s.axis, s.pos);
     set_axis(&rcell.lo, s.axis, s.pos);
     if (n >= TASK_MIN_PRIMS) {
-#pragma omp task default(shared) firstprivate(cl, left, nl, lcell)
-        build_rec(c, cl, left, nl, lcell);
-#pragma omp task default(shared) firstprivate(cr, right, nr, rcell)
-        build_rec(c, cr, right, nr, rcell);
+        assert(heap);
+#pragma omp task default(shared) firstprivate(cl, left, nl, lcell, depth)
+        build_rec(c, cl, left, nl, 1, lcell, depth + 1);
+#pragma omp task default(shared) firstprivate(cr, right, nr, rcell, depth)
+        build_rec(c, cr, right, nr, 1, rcell, depth + 1);
 #pragma omp taskwait
     } else {
-        build_rec(c, cl, left, nl, lcell);
-        build_rec(c, cr, right, nr, rcell);
+        build_rec(c, cl, left, nl, heap, lcell, depth + 1);
+        build_rec(c, cr, right, nr, heap, rcell, depth + 1);
+    }
+    /* §3.4.3, bottom-up as the recursion returns: a split whose two
+     * children are both empty becomes an empty leaf. */
+    if ((c->d->flags & SG_KD_BUILD_COLLAPSE) && is_empty_leaf(cl) && is_empty_leaf(cr)) {
+        node_release(c, cl);
+        node_release(c, cr);
+        node->axis = 3;
+        node->u.leaf.prims = NULL;
+        node->u.leaf.bounds = cell;
+        node->count = 0;
     }
 }
 
-static int is_empty_leaf(const bnode *b) { return b->axis == 3 && b->count == 0; }
-
-/* §3.4.3: a split whose two children are both empty becomes an empty leaf. */
-static void collapse(bnode *b)
-{
-    if (b->axis == 3)
-        return;
-    collapse(b->child[0]);
-    collapse(b->child[1]);
-    if (is_empty_leaf(b->child[0]) && is_empty_leaf(b->child[1])) {
-        free_bnode(b->child[0]);
-        free_bnode(b->child[1]);
-        b->child[0] = b->child[1] = NULL;
-        b->axis = 3;
-        b->prims = NULL;
-        b->count = 0;
-    }
-}
-
-static void count_tree(const bnode *b, size_t *nodes, size_t *leaves, size_t *refs, int *depth)
+static void count_tree(const bnode *b, int depth, size_t *nodes, size_t *leaves, size_t *refs, int *max_depth)
 {
     ++*nodes;
-    if (b->depth > *depth)
-        *depth = b->depth;
+    if (depth > *max_depth)
+        *max_depth = depth;
     if (b->axis == 3) {
         ++*leaves;
         *refs += b->count;
         return;
     }
-    count_tree(b->child[0], nodes, leaves, refs, depth);
-    count_tree(b->child[1], nodes, leaves, refs, depth);
+    count_tree(b->u.inner.child[0], depth + 1, nodes, leaves, refs, max_depth);
+    count_tree(b->u.inner.child[1], depth + 1, nodes, leaves, refs, max_depth);
 }
 
 typedef struct flat_ctx {
@@ -360,21 +435,21 @@ static void flatten(flat_ctx *f, const bnode *b, size_t at)
         size_t l = f->next_leaf++;
         t->leaf_first[l] = (uint32_t)f->next_ref;
         if (b->count)
-            memcpy(t->refs + f->next_ref, b->prims, b->count * sizeof *b->prims);
+            memcpy(t->refs + f->next_ref, b->u.leaf.prims, b->count * sizeof *b->u.leaf.prims);
         else
             t->empty_leaf_count++;
         f->next_ref += b->count;
         t->nodes[at].word = ((uint32_t)l << 2) | 3u;
         t->nodes[at].split = 0.0f;
-        t->leaf_bounds[l] = b->bounds;
+        t->leaf_bounds[l] = b->u.leaf.bounds;
         return;
     }
     size_t child = f->next_node;
     f->next_node += 2;
     t->nodes[at].word = ((uint32_t)child << 2) | (uint32_t)b->axis;
-    t->nodes[at].split = b->split;
-    flatten(f, b->child[0], child);
-    flatten(f, b->child[1], child + 1);
+    t->nodes[at].split = b->u.inner.split;
+    flatten(f, b->u.inner.child[0], child);
+    flatten(f, b->u.inner.child[1], child + 1);
 }
 
 sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err)
@@ -401,30 +476,39 @@ sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err
         bounds = sg_aabb_grow(bounds, hi);
     }
 
+    /* The parallel region below has at most omp_get_max_threads() threads. */
+    const int threads = omp_get_max_threads();
+    c.arenas = sg_calloc_array((size_t)threads, sizeof *c.arenas);
     uint32_t *all = sg_alloc_array(d->count, sizeof *all);
-    bnode *root = new_bnode(&c, 0);
-    if (!all || !root) {
+    if (!all || !c.arenas) {
         sg_free(all);
-        free(root);
+        arenas_free(c.arenas, threads);
         return sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory for %zu primitives", d->count);
     }
     for (size_t i = 0; i < d->count; ++i)
         all[i] = (uint32_t)i;
 
-#pragma omp parallel
+    /* Every arena access, the root's included, happens inside the region,
+     * where thread numbers are below `threads`. */
+    bnode *root = NULL;
+#pragma omp parallel num_threads(threads)
 #pragma omp single
-    build_rec(&c, root, all, d->count, bounds);
+    {
+        root = node_alloc(&c);
+        if (root)
+            build_rec(&c, root, all, d->count, 1, bounds, 0);
+        else
+            sg_free(all);
+    }
 
     if (c.failed) {
         st = sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory during build (%zu primitives)", d->count);
         goto cleanup;
     }
-    if (d->flags & SG_KD_BUILD_COLLAPSE)
-        collapse(root);
 
     size_t nodes = 0, leaves = 0, refs = 0;
     int depth = 0;
-    count_tree(root, &nodes, &leaves, &refs, &depth);
+    count_tree(root, 0, &nodes, &leaves, &refs, &depth);
     if (refs > UINT32_MAX || nodes > UINT32_MAX / 4) {
         st = sg_error_set(err, SG_ERR_UNSUPPORTED, "kd-tree: %zu references exceed 32-bit indices", refs);
         goto cleanup;
@@ -450,7 +534,7 @@ sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err
     *out = t;
 
 cleanup:
-    free_bnode(root);
+    arenas_free(c.arenas, threads);
     return st;
 }
 

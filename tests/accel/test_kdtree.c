@@ -216,6 +216,88 @@ static void test_kdtree_collapse_merges_empty_siblings(void **state)
     sg_kdtree_free(&t);
 }
 
+/* Number of inner nodes whose two children are both empty leaves. */
+static size_t empty_pairs(const sg_kdtree *t, uint32_t ni)
+{
+    sg_kd_node n = t->nodes[ni];
+    if (sg_kd_node_is_leaf(n))
+        return 0;
+    uint32_t c = sg_kd_node_index(n);
+    size_t pairs = 0;
+    sg_kd_node l = t->nodes[c], r = t->nodes[c + 1];
+    if (sg_kd_node_is_leaf(l) && sg_kd_node_is_leaf(r)) {
+        uint32_t a = sg_kd_node_index(l), b = sg_kd_node_index(r);
+        pairs += t->leaf_first[a] == t->leaf_first[a + 1] && t->leaf_first[b] == t->leaf_first[b + 1];
+    }
+    return pairs + empty_pairs(t, c) + empty_pairs(t, c + 1);
+}
+
+/* The collapse runs bottom-up during the build: with a shrink hook that
+ * empties part of the cells, no split is left with two empty children (and
+ * without the flag some are: the check can fail), and the same boxes
+ * overlap every leaf either way. */
+static void test_kdtree_collapse_leaves_no_empty_pair(void **state)
+{
+    (void)state;
+    static boxes b;
+    make_boxes(&b, 13);
+    sg_kdtree_desc d = desc_for(&b, SG_KD_BUILD_ENCOURAGE);
+    d.shrink = shrink_to_slab;
+    sg_kdtree plain, collapsed;
+    assert_int_equal(sg_kdtree_build(&d, &plain, NULL), SG_OK);
+    d.flags |= SG_KD_BUILD_COLLAPSE;
+    assert_int_equal(sg_kdtree_build(&d, &collapsed, NULL), SG_OK);
+    assert_true(empty_pairs(&plain, 0) > 0);
+    assert_int_equal(empty_pairs(&collapsed, 0), 0);
+    assert_true(collapsed.node_count < plain.node_count);
+    /* Collapsing only removes empty leaves: the references are the same. */
+    assert_int_equal(collapsed.ref_count, plain.ref_count);
+    assert_int_equal(collapsed.leaf_count - collapsed.empty_leaf_count, plain.leaf_count - plain.empty_leaf_count);
+    sg_kdtree_free(&plain);
+    sg_kdtree_free(&collapsed);
+}
+
+/* Every allocation of the build fails in turn (arena blocks, partitions,
+ * the final arrays): the build returns SG_ERR_NOMEM with *out untouched and
+ * nothing leaked, or succeeds with the same tree as without faults. */
+static void test_kdtree_allocation_failures(void **state)
+{
+    (void)state;
+    static boxes b;
+    make_boxes(&b, 21);
+    sg_kdtree_desc d = desc_for(&b, SG_KD_BUILD_ENCOURAGE | SG_KD_BUILD_COLLAPSE);
+    d.shrink = shrink_to_slab;
+    sg_kdtree good;
+    assert_int_equal(sg_kdtree_build(&d, &good, NULL), SG_OK);
+    int failures = 0;
+    for (long k = 0;; ++k) {
+        long live = sg_alloc__live();
+        sg_kdtree t;
+        memset(&t, 0xAB, sizeof t);
+        sg_kdtree before = t;
+        sg_error err;
+        sg_alloc__fail_after(k);
+        sg_status st = sg_kdtree_build(&d, &t, &err);
+        long left = sg_alloc__fail_after(-1);
+        if (st == SG_OK) {
+            assert_int_equal(t.node_count, good.node_count);
+            assert_memory_equal(t.nodes, good.nodes, t.node_count * sizeof *t.nodes);
+            assert_memory_equal(t.refs, good.refs, t.ref_count * sizeof *t.refs);
+            sg_kdtree_free(&t);
+            if (left > 0)
+                break; /* no fault was reached: every allocation has been failed once */
+            continue;
+        }
+        ++failures;
+        assert_int_equal(st, SG_ERR_NOMEM);
+        assert_non_null(strstr(err.message, "out of memory"));
+        assert_memory_equal(&t, &before, sizeof t);
+        assert_int_equal(sg_alloc__live(), live);
+    }
+    assert_true(failures > 3);
+    sg_kdtree_free(&good);
+}
+
 static void test_kdtree_rejects_bad_input(void **state)
 {
     (void)state;
@@ -244,6 +326,8 @@ int main(void)
         cmocka_unit_test(test_kdtree_deterministic_across_threads),
         cmocka_unit_test(test_kdtree_shrink_hook_cuts_empty_space),
         cmocka_unit_test(test_kdtree_collapse_merges_empty_siblings),
+        cmocka_unit_test(test_kdtree_collapse_leaves_no_empty_pair),
+        cmocka_unit_test(test_kdtree_allocation_failures),
         cmocka_unit_test(test_kdtree_rejects_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
