@@ -18,7 +18,7 @@ static const char usage[] =
     "  --ci               tiny sizes, built-in bunny only (the ctest sweep, < 1 min)\n"
     "  --parts A,B,...    stability, surfaces, bake, scaling, headline, all (default all)\n"
     "  --sizes A,B,...    scaling point counts (default 2000,8000,32000,128000,512000,1000000;\n"
-    "                     the process needs ~3 KB per point: 24M does not fit in 24 GiB;\n"
+    "                     the process peaks at ~0.6 KB per point: 24M needs ~13 GiB;\n"
     "                     --ci: 2000,8000)\n"
     "  --case NAME        stability: only this case (see --list-cases)\n"
     "  --timeout S        stability: seconds per case and model (default 300; --ci 60)\n"

@@ -126,8 +126,8 @@ set key top left
 plot "$tmpd/sc" u 1:4 w lp lw 2 pt 7 t "scene (kd-tree + splats)", "$tmpd/sc" u 1:14 w lp lw 2 pt 5 t "bake (irradiance)", "$tmpd/sc" u 1:5 w lp lw 2 pt 9 t "process RSS"
 unset logscale y
 set ylabel "per primary ray"
-set yrange [0:*]
-set key center right
+set yrange [0:45]
+set key top right
 set title "traversal (sg\\\\_ray\\\\_stats)"
 plot "$tmpd/sc" u 1:9 w lp lw 2 pt 7 t "node steps", "$tmpd/sc" u 1:10 w lp lw 2 pt 5 t "leaves", "$tmpd/sc" u 1:12 w lp lw 2 pt 9 t "splats evaluated"
 set logscale y

@@ -9,9 +9,9 @@
 #                                     converged references are cached in
 #                                     out/verify/cache and reused after).
 #   scripts/verify.sh --ci            the CI sweep (< 1 min) into out/verify-ci
-#   scripts/verify.sh --parts scaling --sizes 2000000,4000000
-#                                     the long scaling run (~12 min; 24M
-#                                     points needs ~70 GiB: docs/verify.md)
+#   scripts/verify.sh --parts scaling --sizes 2000000,4000000,8000000,16000000,24000000
+#                                     the long scaling run (~25 min; 24M
+#                                     points peaks at 13 GiB: docs/verify.md)
 # Any other splatgi-verify option passes through (--help lists them).
 # Exit: the verifier's (2: a stability case was flagged; charts are still drawn).
 set -euo pipefail
