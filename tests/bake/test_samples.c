@@ -51,28 +51,52 @@ static void check_spacing_and_coverage(const sg_pointset *ps, const sg_sample_se
     }
 }
 
+/* A builtin model's splats thinned at `radii` median radii: the setup
+ * every test below shares. */
+typedef struct thinned {
+    sg_world *w;
+    const sg_pointset *ps;
+    float med, s;
+    sg_sample_set set;
+} thinned;
+
+static thinned thin_builtin(const char *builtin, int points, float radii)
+{
+    char json[128];
+    snprintf(json, sizeof json, "{\"models\":[{\"builtin\":\"%s\",\"points\":%d}]}", builtin, points);
+    thinned t = {.w = sg_test_world_from_json(json)};
+    t.ps = sg_scene_points(sg_world_scene(t.w, 0));
+    assert_int_equal(sg_samples_median_radius(t.ps, &t.med, NULL), SG_OK);
+    assert_true(t.med > 0.0f);
+    t.s = radii * t.med;
+    assert_int_equal(sg_samples_thin(t.ps, t.s, COS, NULL, 0, 0, &t.set, NULL), SG_OK);
+    return t;
+}
+
+static void thinned_free(thinned *t)
+{
+    sg_sample_set_free(&t->set);
+    sg_world_destroy(t->w);
+}
+
 static void test_samples_thin_spacing_coverage_determinism(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":12000}]}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
-    float med;
-    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
-    assert_true(med > 0.0f);
-    float s = 4.0f * med;
-    sg_sample_set a = {0}, b = {0};
-    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &a, NULL), SG_OK);
+    thinned t = thin_builtin("sphere", 12000, 4.0f);
+    const sg_pointset *ps = t.ps;
+    const sg_sample_set *a = &t.set;
+    float med = t.med, s = t.s;
+    sg_sample_set b = {0};
     assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &b, NULL), SG_OK);
-    assert_int_equal(a.count, b.count);
-    assert_memory_equal(a.splat, b.splat, a.count * sizeof *a.splat);
+    assert_int_equal(a->count, b.count);
+    assert_memory_equal(a->splat, b.splat, a->count * sizeof *a->splat);
     /* A disk of radius s holds about (s / spacing)^2 pi / (pi/4..1) splats
      * of a Poisson-disk set: expect well under a tenth of the splats. */
-    fprintf(stderr, "thinning: %zu of %zu splats at spacing %g (median radius %g)\n", a.count, ps->count, s, med);
-    assert_true(a.count > 50 && a.count * 5 < ps->count);
-    check_spacing_and_coverage(ps, &a, s);
-    sg_sample_set_free(&a);
+    fprintf(stderr, "thinning: %zu of %zu splats at spacing %g (median radius %g)\n", a->count, ps->count, s, med);
+    assert_true(a->count > 50 && a->count * 5 < ps->count);
+    check_spacing_and_coverage(ps, a, s);
     sg_sample_set_free(&b);
-    sg_world_destroy(w);
+    thinned_free(&t);
 }
 
 /* A step in x on the ground: refinement adds samples only near the step,
@@ -80,53 +104,49 @@ static void test_samples_thin_spacing_coverage_determinism(void **state)
 static void test_samples_refine_follows_a_step(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
-    float med;
-    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
-    float s = 4.0f * med;
-    sg_sample_set set = {0};
-    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
-    size_t n0 = set.count;
+    thinned t = thin_builtin("ground", 20000, 4.0f);
+    const sg_pointset *ps = t.ps;
+    sg_sample_set *set = &t.set;
+    float s = t.s;
+    size_t n0 = set->count;
     float *v = sg_alloc_array(3 * ps->count, sizeof *v);
     assert_non_null(v);
     for (size_t j = 0; j < 3 * n0; ++j)
         v[j] = 2.0f;
     size_t added = 1;
-    assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, set, &added, NULL), SG_OK);
     assert_int_equal(added, 0);
     for (size_t j = 0; j < n0; ++j)
         for (int c = 0; c < 3; ++c)
-            v[3 * j + c] = ps->px[set.splat[j]] > 0.0f ? 2.0f : 0.2f;
+            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
     /* The same step within its noise (standard error 1 on a difference
      * of 1.8): not significant, not refined. */
     float *sig = sg_alloc_array(n0, sizeof *sig);
     assert_non_null(sig);
     for (size_t j = 0; j < n0; ++j)
         sig[j] = 1.0f;
-    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, set, &added, NULL), SG_OK);
     assert_int_equal(added, 0);
     for (size_t j = 0; j < n0; ++j)
         sig[j] = 0.1f;
-    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, &set, &added, NULL), SG_OK);
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, sig, 0.5f, 0, set, &added, NULL), SG_OK);
     fprintf(stderr, "refinement: %zu samples, %zu added along the step\n", n0, added);
     assert_true(added > 0);
-    assert_int_equal(set.count, n0 + added);
-    for (size_t j = n0; j < set.count; ++j) {
-        assert_int_equal(set.level[j], 1);
+    assert_int_equal(set->count, n0 + added);
+    for (size_t j = n0; j < set->count; ++j) {
+        assert_int_equal(set->level[j], 1);
         /* marked samples lie within 2 s of the step, candidates within s of them */
-        if (!(fabsf(ps->px[set.splat[j]]) <= 3.0f * s))
+        if (!(fabsf(ps->px[set->splat[j]]) <= 3.0f * s))
             fail_msg("refined sample %zu at x = %g, farther than 3 s = %g from the step", j,
-                     ps->px[set.splat[j]], 3.0f * s);
+                     ps->px[set->splat[j]], 3.0f * s);
         for (size_t k = 0; k < j; ++k)
-            if (d2(ps, set.splat[j], set.splat[k]) < 0.25f * s * s)
+            if (d2(ps, set->splat[j], set->splat[k]) < 0.25f * s * s)
                 fail_msg("refined sample %zu is %g from sample %zu, under s/2 = %g", j,
-                         sqrt(d2(ps, set.splat[j], set.splat[k])), k, 0.5 * s);
+                         sqrt(d2(ps, set->splat[j], set->splat[k])), k, 0.5 * s);
     }
     sg_free(v);
     sg_free(sig);
-    sg_sample_set_free(&set);
-    sg_world_destroy(w);
+    thinned_free(&t);
 }
 
 /* Normalised weights: a constant comes back exactly (to float rounding);
@@ -134,22 +154,19 @@ static void test_samples_refine_follows_a_step(void **state)
 static void test_samples_interpolate(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":20000}]}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
-    float med;
-    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
-    float s = 4.0f * med;
-    sg_sample_set set = {0};
-    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
-    float *v = sg_alloc_array(3 * set.count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
+    thinned t = thin_builtin("ground", 20000, 4.0f);
+    const sg_pointset *ps = t.ps;
+    sg_sample_set *set = &t.set;
+    float s = t.s;
+    float *v = sg_alloc_array(3 * set->count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
     assert_non_null(v);
     assert_non_null(out);
-    for (size_t j = 0; j < set.count; ++j) {
+    for (size_t j = 0; j < set->count; ++j) {
         v[3 * j] = 1.5f;
         v[3 * j + 1] = 0.25f;
         v[3 * j + 2] = 3.0f;
     }
-    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    assert_int_equal(sg_samples_interpolate(ps, set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
     for (size_t i = 0; i < ps->count; ++i)
         if (fabsf(out[3 * i] - 1.5f) > 1e-5f || fabsf(out[3 * i + 1] - 0.25f) > 1e-5f ||
             fabsf(out[3 * i + 2] - 3.0f) > 1e-5f)
@@ -157,13 +174,13 @@ static void test_samples_interpolate(void **state)
                      out[3 * i + 2]);
     /* A linear function of position, away from the rim (where the fit
      * would extrapolate and is clamped): reproduced to float rounding. */
-    for (size_t j = 0; j < set.count; ++j) {
-        float x = ps->px[set.splat[j]], z = ps->pz[set.splat[j]];
+    for (size_t j = 0; j < set->count; ++j) {
+        float x = ps->px[set->splat[j]], z = ps->pz[set->splat[j]];
         v[3 * j] = 2.0f + 0.05f * x;
         v[3 * j + 1] = 2.0f - 0.03f * z;
         v[3 * j + 2] = 2.0f + 0.02f * (x + z);
     }
-    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    assert_int_equal(sg_samples_interpolate(ps, set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
     for (size_t i = 0; i < ps->count; ++i) {
         float x = ps->px[i], z = ps->pz[i];
         if (fabsf(x) > 15.0f - 3.0f * s || fabsf(z) > 15.0f - 3.0f * s)
@@ -174,9 +191,9 @@ static void test_samples_interpolate(void **state)
                 fail_msg("splat %zu at (%g, %g), channel %d: %.6f, the linear field is %.6f", i, x, z, c,
                          out[3 * i + (size_t)c], want[c]);
     }
-    for (size_t j = 0; j < set.count; ++j)
-        v[3 * j] = v[3 * j + 1] = v[3 * j + 2] = ps->px[set.splat[j]] > 0.0f ? 1.0f : 0.0f;
-    assert_int_equal(sg_samples_interpolate(ps, &set, s, 2.0f, COS, v, 1, out, NULL), SG_OK);
+    for (size_t j = 0; j < set->count; ++j)
+        v[3 * j] = v[3 * j + 1] = v[3 * j + 2] = ps->px[set->splat[j]] > 0.0f ? 1.0f : 0.0f;
+    assert_int_equal(sg_samples_interpolate(ps, set, s, 2.0f, COS, v, 1, out, NULL), SG_OK);
     for (size_t i = 0; i < ps->count; ++i) {
         float x = ps->px[i];
         if (fabsf(x) > 2.0f * s && out[3 * i] != (x > 0.0f ? 1.0f : 0.0f))
@@ -184,36 +201,31 @@ static void test_samples_interpolate(void **state)
     }
     sg_free(v);
     sg_free(out);
-    sg_sample_set_free(&set);
-    sg_world_destroy(w);
+    thinned_free(&t);
 }
 
 static void test_samples_nearest(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}]}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
-    float med;
-    assert_int_equal(sg_samples_median_radius(ps, &med, NULL), SG_OK);
-    float s = 3.0f * med;
-    sg_sample_set set = {0};
-    assert_int_equal(sg_samples_thin(ps, s, COS, NULL, 0, 0, &set, NULL), SG_OK);
+    thinned t = thin_builtin("sphere", 6000, 3.0f);
+    const sg_pointset *ps = t.ps;
+    sg_sample_set *set = &t.set;
+    float s = t.s;
     uint32_t *near = sg_alloc_array(ps->count, sizeof *near);
     assert_non_null(near);
-    assert_int_equal(sg_samples_nearest(ps, &set, s, COS, 2, near, NULL), SG_OK);
+    assert_int_equal(sg_samples_nearest(ps, set, s, COS, 2, near, NULL), SG_OK);
     for (size_t i = 0; i < ps->count; ++i) {
-        assert_true(near[i] < set.count);
+        assert_true(near[i] < set->count);
         float best = INFINITY;
-        for (size_t j = 0; j < set.count; ++j)
-            if (same_facing(ps, i, set.splat[j]) && d2(ps, i, set.splat[j]) < best)
-                best = d2(ps, i, set.splat[j]);
-        if (d2(ps, i, set.splat[near[i]]) != best)
+        for (size_t j = 0; j < set->count; ++j)
+            if (same_facing(ps, i, set->splat[j]) && d2(ps, i, set->splat[j]) < best)
+                best = d2(ps, i, set->splat[j]);
+        if (d2(ps, i, set->splat[near[i]]) != best)
             fail_msg("splat %zu: sample %u at %g, the nearest is at %g", i, near[i],
-                     sqrt(d2(ps, i, set.splat[near[i]])), sqrt(best));
+                     sqrt(d2(ps, i, set->splat[near[i]])), sqrt(best));
     }
     sg_free(near);
-    sg_sample_set_free(&set);
-    sg_world_destroy(w);
+    thinned_free(&t);
 }
 
 int main(void)
