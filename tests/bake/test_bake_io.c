@@ -90,6 +90,22 @@ static unsigned char *read_all(const char *path, size_t *size)
     return buf;
 }
 
+/* Saves b under tmp_path(name) and checks the file is the same bytes as
+ * the file at `expected`. */
+static void assert_saves_as(const sg_bake *b, const char *name, const char *expected)
+{
+    sg_error err = {0};
+    const char *path = tmp_path(name);
+    if (sg_bake_save(b, path, SCENE_HASH, &err) != SG_OK)
+        fail_msg("save %s: %s", path, err.message);
+    size_t n1, n2;
+    unsigned char *f1 = read_all(expected, &n1), *f2 = read_all(path, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(f1, f2, n1);
+    free(f1);
+    free(f2);
+}
+
 static void write_all(const char *path, const void *data, size_t size)
 {
     FILE *f = fopen(path, "wb");
@@ -159,14 +175,7 @@ static void test_bake_io_roundtrip(void **state)
     assert_int_equal(dc.photons.seed, 7);
     assert_int_equal(dc.gather.k, 32);
     /* Saving the loaded bake gives the same bytes (invariant 1). */
-    const char *again = tmp_path("round2.sgbake");
-    assert_int_equal(sg_bake_save(c, again, SCENE_HASH, &err), SG_OK);
-    size_t n1, n2;
-    unsigned char *f1 = read_all(path, &n1), *f2 = read_all(again, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(f1, f2, n1);
-    free(f1);
-    free(f2);
+    assert_saves_as(c, "round2.sgbake", path);
     sg_image_free(&ib);
     sg_image_free(&ic);
     sg_bake_destroy(b);
@@ -395,14 +404,7 @@ static void test_bake_io_glossy_roundtrip(void **state)
     render(b, w, &ib);
     render(c, w, &ic);
     assert_memory_equal(ib.data, ic.data, sizeof(float) * 3 * 24 * 24);
-    const char *again = tmp_path("glossy2.sgbake");
-    assert_int_equal(sg_bake_save(c, again, SCENE_HASH, &err), SG_OK);
-    size_t n1, n2;
-    unsigned char *f1 = read_all(path, &n1), *f2 = read_all(again, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(f1, f2, n1);
-    free(f1);
-    free(f2);
+    assert_saves_as(c, "glossy2.sgbake", path);
     sg_image_free(&ib);
     sg_image_free(&ic);
     sg_bake_destroy(b);
@@ -489,30 +491,18 @@ static void test_bake_io_resume_equals_one_pass(void **state)
     sg_bake *b1 = NULL, *b2 = NULL;
     assert_int_equal(sg_bake_create_from_photons(w, &d, &one, &b1, &err), SG_OK);
     assert_int_equal(sg_bake_create_from_photons(w, &d, &resumed, &b2, &err), SG_OK);
-    const char *p1 = tmp_path("one.sgbake"), *p2 = tmp_path("resumed.sgbake");
+    const char *p1 = tmp_path("one.sgbake");
     assert_int_equal(sg_bake_save(b1, p1, SCENE_HASH, &err), SG_OK);
-    assert_int_equal(sg_bake_save(b2, p2, SCENE_HASH, &err), SG_OK);
-    size_t n1, n2;
-    unsigned char *f1 = read_all(p1, &n1), *f2 = read_all(p2, &n2);
-    assert_int_equal(n1, n2);
-    assert_memory_equal(f1, f2, n1);
+    assert_saves_as(b2, "resumed.sgbake", p1);
     /* and sg_bake_create (one call) makes the same bake again */
     sg_bake *b3 = make_bake(w, 100000);
-    const char *p3 = tmp_path("create.sgbake");
-    assert_int_equal(sg_bake_save(b3, p3, SCENE_HASH, &err), SG_OK);
-    size_t n3;
-    unsigned char *f3 = read_all(p3, &n3);
-    assert_int_equal(n1, n3);
-    assert_memory_equal(f1, f3, n1);
+    assert_saves_as(b3, "create.sgbake", p1);
     /* an incomplete map does not make a bake */
     sg_photon_map part = {0};
     assert_int_equal(sg_photons_trace_more(w, &d.photons, 3, &part, &err), SG_OK);
     sg_bake *none = NULL;
     assert_int_equal(sg_bake_create_from_photons(w, &d, &part, &none, &err), SG_ERR_INVALID_ARG);
     assert_null(none);
-    free(f1);
-    free(f2);
-    free(f3);
     sg_photon_map_free(&part);
     sg_bake_destroy(b1);
     sg_bake_destroy(b2);
