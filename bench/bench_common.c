@@ -125,25 +125,13 @@ uint64_t bench_mix_file(uint64_t key, const char *path)
     return sg_mix64(key ^ (uint64_t)st.st_mtime);
 }
 
-sg_status bench_place_mesh(const char *mesh_path, float length, bench_placement *out, sg_error *err)
+sg_status bench_place_mesh(const char *mesh_path, float length, sg_ground_placement *out, sg_error *err)
 {
-    sg_mesh m = {0};
-    sg_status st = sg_mesh_read(mesh_path, &m, err);
+    sg_aabb b;
+    sg_status st = sg_mesh_read_bounds(mesh_path, &b, err);
     if (st != SG_OK)
         return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
-    sg_mesh_free(&m);
-    sg_vec3 ext = sg_v3_sub(b.hi, b.lo);
-    float longest = fmaxf(ext.x, fmaxf(ext.y, ext.z));
-    if (!(longest > 0.0f))
+    if (sg_mesh_ground_placement(b, length, out, NULL) != SG_OK)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: empty or degenerate bounds", mesh_path);
-    bench_placement p;
-    p.scale = length / longest;
-    p.translate = sg_v3(-p.scale * 0.5f * (b.lo.x + b.hi.x), -p.scale * b.lo.y, -p.scale * 0.5f * (b.lo.z + b.hi.z));
-    p.world_box.lo = sg_v3_add(sg_v3_scale(b.lo, p.scale), p.translate);
-    p.world_box.hi = sg_v3_add(sg_v3_scale(b.hi, p.scale), p.translate);
-    *out = p;
     return SG_OK;
 }

@@ -10,6 +10,7 @@
 #include <stdio.h>
 
 #include "core/error.h"
+#include "io/mesh.h"
 #include "math/vec3.h"
 
 /* "prog: message" on stderr; returns 1, the programs' failure value
@@ -39,16 +40,10 @@ int bench_json_escape(const char *s, char *out, size_t cap);
  * cache key). */
 uint64_t bench_mix_file(uint64_t key, const char *path);
 
-/* Where the benchmarks put a scanned mesh: scaled to `length` world units
- * along its longest side, centred in x and z, standing on y = 0 (the
- * builtin ground). p' = translate + scale p; world_box is the mesh's box
- * after that. SG_ERR_INVALID_ARG for an empty or degenerate mesh; the
- * mesh reader's errors otherwise. */
-typedef struct bench_placement {
-    float scale;
-    sg_vec3 translate;
-    sg_aabb world_box;
-} bench_placement;
-sg_status bench_place_mesh(const char *mesh_path, float length, bench_placement *out, sg_error *err);
+/* Where the benchmarks put a scanned mesh: sg_mesh_ground_placement
+ * (io/mesh.h) of the mesh file's vertex box, `length` world units along its
+ * longest side. SG_ERR_INVALID_ARG, naming the file, for an empty or
+ * degenerate mesh; the mesh reader's errors otherwise. */
+sg_status bench_place_mesh(const char *mesh_path, float length, sg_ground_placement *out, sg_error *err);
 
 #endif

@@ -251,22 +251,6 @@ static sg_status make_cameras(sg_aabb b, const options *o, sg_camera cams[2], sg
     return sg_camera_frame(part, dir, up, FOV_DEG, 1.0f, CLOSEUP_MARGIN, &cams[VIEW_CLOSEUP], err);
 }
 
-/* Box of the mesh's vertices: the cameras frame the mesh, so they are the
- * same for every sample count. */
-static sg_status mesh_bounds(const char *path, sg_aabb *out, sg_error *err)
-{
-    sg_mesh m = {0};
-    sg_status st = sg_mesh_read(path, &m, err);
-    if (st != SG_OK)
-        return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
-    sg_mesh_free(&m);
-    *out = b;
-    return SG_OK;
-}
-
 /* ---- measuring -------------------------------------------------------- */
 
 /* Hit-or-miss of every pixel's primary ray through splatgi (untimed). */
@@ -453,7 +437,8 @@ int main(int argc, char **argv)
     sg_error err;
     sg_aabb bounds;
     double t0 = omp_get_wtime();
-    if (mesh_bounds(o.mesh, &bounds, &err) != SG_OK)
+    /* The cameras frame the mesh's vertices: the same for every sample count. */
+    if (sg_mesh_read_bounds(o.mesh, &bounds, &err) != SG_OK)
         return fail("%s", err.message);
     printf("bench_trace: mesh %s, bounds (%g %g %g)-(%g %g %g), read in %.2f s\n", o.mesh,
            (double)bounds.lo.x, (double)bounds.lo.y, (double)bounds.lo.z, (double)bounds.hi.x,

@@ -272,13 +272,13 @@ typedef struct scene_setup {
 
 static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
 {
-    bench_placement pl;
+    sg_ground_placement pl;
     sg_status st = bench_place_mesh(o->mesh, SCENE_LENGTH, &pl, err);
     if (st != SG_OK)
         return st;
     s->scale = pl.scale;
     s->translate = pl.translate;
-    s->world_box = pl.world_box;
+    s->world_box = pl.placed;
     s->have_envmap = access(o->envmap, R_OK) == 0;
     return SG_OK;
 }

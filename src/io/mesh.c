@@ -227,3 +227,33 @@ bool sg_io_parse_number(const char **pp, const char *end, double *out)
     *pp = p;
     return true;
 }
+
+sg_status sg_mesh_read_bounds(const char *path, sg_aabb *out, sg_error *err)
+{
+    sg_mesh m = {0};
+    sg_status st = sg_mesh_read(path, &m, err);
+    if (st != SG_OK)
+        return st;
+    sg_aabb b = sg_aabb_empty();
+    for (size_t i = 0; i < m.vertex_count; i++)
+        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
+    sg_mesh_free(&m);
+    *out = b;
+    return SG_OK;
+}
+
+sg_status sg_mesh_ground_placement(sg_aabb b, float length, sg_ground_placement *out, sg_error *err)
+{
+    sg_vec3 ext = sg_v3_sub(b.hi, b.lo);
+    float longest = fmaxf(ext.x, fmaxf(ext.y, ext.z));
+    if (!(longest > 0.0f) || !(length > 0.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "ground placement: empty or degenerate bounds, or length %g",
+                            (double)length);
+    sg_ground_placement p;
+    p.scale = length / longest;
+    p.translate = sg_v3(-p.scale * 0.5f * (b.lo.x + b.hi.x), -p.scale * b.lo.y, -p.scale * 0.5f * (b.lo.z + b.hi.z));
+    p.placed.lo = sg_v3_add(sg_v3_scale(b.lo, p.scale), p.translate);
+    p.placed.hi = sg_v3_add(sg_v3_scale(b.hi, p.scale), p.translate);
+    *out = p;
+    return SG_OK;
+}

@@ -16,6 +16,7 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "math/vec3.h"
 
 typedef struct sg_mesh {
     size_t vertex_count;   /* number of vertices                          */
@@ -34,5 +35,20 @@ sg_status sg_mesh_read(const char *path, sg_mesh *out, sg_error *err);
 
 /* Frees every array and zeroes the struct; NULL and zeroed meshes are fine. */
 void sg_mesh_free(sg_mesh *mesh);
+
+/* Box of a model file's vertex positions (read, then freed): what the
+ * benchmarks and the verifier need to place and frame a scan. */
+sg_status sg_mesh_read_bounds(const char *path, sg_aabb *out, sg_error *err);
+
+/* The uniform scale and translation that make box `b` `length` long on its
+ * longest side, centred on x = z = 0 and standing on y = 0 (a scan put on
+ * the builtin ground); *placed is the box after them. Fails on an empty or
+ * point-sized box. */
+typedef struct sg_ground_placement {
+    float scale;
+    sg_vec3 translate;
+    sg_aabb placed;
+} sg_ground_placement;
+sg_status sg_mesh_ground_placement(sg_aabb b, float length, sg_ground_placement *out, sg_error *err);
 
 #endif

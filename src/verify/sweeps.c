@@ -82,22 +82,16 @@ static sg_status mscene_setup(const char *name, const char *mesh, const char *en
     snprintf(s->mesh, sizeof s->mesh, "%s", mesh);
     if (env && access(env, R_OK) == 0)
         snprintf(s->env, sizeof s->env, "%s", env);
-    sg_mesh m = {0};
-    sg_status st = sg_mesh_read(mesh, &m, err);
+    sg_aabb b;
+    sg_ground_placement pl;
+    sg_status st = sg_mesh_read_bounds(mesh, &b, err);
     if (st != SG_OK)
         return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
-    sg_mesh_free(&m);
-    sg_vec3 ext = sg_v3_sub(b.hi, b.lo);
-    float longest = fmaxf(ext.x, fmaxf(ext.y, ext.z));
-    if (!(longest > 0.0f))
+    if (sg_mesh_ground_placement(b, SCENE_LENGTH, &pl, NULL) != SG_OK)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: empty or degenerate bounds", mesh);
-    s->scale = SCENE_LENGTH / longest;
-    s->translate = sg_v3(-s->scale * 0.5f * (b.lo.x + b.hi.x), -s->scale * b.lo.y, -s->scale * 0.5f * (b.lo.z + b.hi.z));
-    sg_aabb wb = {sg_v3_add(sg_v3_scale(b.lo, s->scale), s->translate), sg_v3_add(sg_v3_scale(b.hi, s->scale), s->translate)};
-    return sg_camera_frame(wb, sg_v3(view_dir[0], view_dir[1], view_dir[2]), sg_v3(0, 1, 0), 40.0f, 1.0f, 0.9f,
+    s->scale = pl.scale;
+    s->translate = pl.translate;
+    return sg_camera_frame(pl.placed, sg_v3(view_dir[0], view_dir[1], view_dir[2]), sg_v3(0, 1, 0), 40.0f, 1.0f, 0.9f,
                            &s->cam, err);
 }
 

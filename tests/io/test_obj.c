@@ -175,6 +175,33 @@ static void test_obj_read_through_mesh_dispatch(void **state)
     sg_mesh_free(&m);
 }
 
+/* sg_mesh_read_bounds is the vertex box; sg_mesh_ground_placement scales
+ * the longest side to the length, centres x and z, stands the box on y = 0,
+ * and refuses a point-sized box. */
+static void test_mesh_bounds_and_ground_placement(void **state)
+{
+    (void)state;
+    const char *path = write_text("box.obj", "v -1 2 3\nv 3 4 4\nv 1 2.5 5\nf 1 2 3\n");
+    sg_aabb b;
+    sg_error err = {0};
+    if (sg_mesh_read_bounds(path, &b, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    expect_vec(&b.lo.x, -1.0f, 2.0f, 3.0f, 0.0, "lo", 0);
+    expect_vec(&b.hi.x, 3.0f, 4.0f, 5.0f, 0.0, "hi", 0);
+    sg_ground_placement p;
+    assert_int_equal(sg_mesh_ground_placement(b, 10.0f, &p, &err), SG_OK);
+    assert_true(p.scale == 2.5f); /* longest side 4 -> 10 */
+    expect_vec(&p.placed.lo.x, -5.0f, 0.0f, -2.5f, 1e-6, "placed lo", 0);
+    expect_vec(&p.placed.hi.x, 5.0f, 5.0f, 2.5f, 1e-6, "placed hi", 0);
+    sg_vec3 moved = sg_v3_add(sg_v3_scale(b.hi, p.scale), p.translate);
+    expect_vec(&moved.x, 5.0f, 5.0f, 2.5f, 1e-6, "translate + scale hi", 0);
+    sg_aabb point = {sg_v3(1, 1, 1), sg_v3(1, 1, 1)};
+    assert_int_equal(sg_mesh_ground_placement(point, 10.0f, &p, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "degenerate"));
+    assert_int_equal(sg_mesh_ground_placement(sg_aabb_empty(), 10.0f, &p, NULL), SG_ERR_INVALID_ARG);
+    assert_int_equal(sg_mesh_read_bounds(write_text("none.obj", "v 1 2\n"), &b, &err), SG_ERR_CORRUPT);
+}
+
 /* ---- failures ------------------------------------------------------------ */
 
 static void expect_fail(const char *name, const char *text, sg_status want, const char *frag)
@@ -314,6 +341,7 @@ int main(void)
         cmocka_unit_test(test_obj_polygon_fan),
         cmocka_unit_test(test_obj_relative_indices_count_vertices_so_far),
         cmocka_unit_test(test_obj_read_through_mesh_dispatch),
+        cmocka_unit_test(test_mesh_bounds_and_ground_placement),
         cmocka_unit_test(test_obj_malformed_number),
         cmocka_unit_test(test_obj_number_with_trailing_junk),
         cmocka_unit_test(test_obj_too_few_coordinates),
