@@ -15,7 +15,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "envmap/analytic.h"
@@ -23,6 +22,7 @@
 #include "math/rng.h"
 #include "points/model_points.h"
 #include "points/primitives.h"
+#include "verify/verify_int.h"
 
 enum {
     C_SPHERE_CLEAN, C_BUNNY_CLEAN, C_COARSE_2K, C_RADII_SMALL, C_NOISY_NORMALS, C_MISSING_NORMALS, C_SHARP_CUBE,
@@ -245,27 +245,12 @@ static void model_json(json_buf *b, int first, const char *ply, float radius_sca
             first ? "" : ", ", ply, (double)radius_scale, (double)scale, model == SG_SURFACE_DISK ? "disk" : "mls");
 }
 
-static int make_dirs(const char *path)
-{
-    char buf[4096];
-    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
-        return 0;
-    for (char *p = buf + 1; *p; p++)
-        if (*p == '/') {
-            *p = 0;
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return 0;
-            *p = '/';
-        }
-    return mkdir(buf, 0777) == 0 || errno == EEXIST;
-}
-
 sg_status sg_verify_case_make(int index, sg_surface_model model, int small, const char *work_dir,
                               sg_verify_case *out, sg_error *err)
 {
     if (index < 0 || index >= C_COUNT)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "no stability case %d", index);
-    if (!make_dirs(work_dir))
+    if (!sg_verify__make_dirs(work_dir))
         return sg_error_set(err, SG_ERR_IO, "%s: cannot create: %s", work_dir, strerror(errno));
     sg_verify_case c = {.name = case_table[index].name, .what = case_table[index].what,
                         .baseline = case_table[index].baseline};

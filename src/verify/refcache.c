@@ -11,17 +11,16 @@
  */
 #include "verify/refcache.h"
 
-#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "math/rng.h"
+#include "verify/verify_int.h"
 
 #define FNV_PRIME 0x100000001b3ull
 
@@ -132,21 +131,6 @@ static sg_status render_centred(const sg_world *w, const sg_verify_ref_desc *d, 
     return SG_OK;
 }
 
-static int make_dirs(const char *path)
-{
-    char buf[4096];
-    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
-        return 0;
-    for (char *p = buf + 1; *p; p++)
-        if (*p == '/') {
-            *p = 0;
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
-                return 0;
-            *p = '/';
-        }
-    return mkdir(buf, 0777) == 0 || errno == EEXIST;
-}
-
 sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, sg_ref_result *out, int *cached,
                               char *path, size_t path_cap, sg_error *err)
 {
@@ -189,7 +173,7 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
     sg_status st = render_centred(w, &d, &r, err);
     if (st != SG_OK)
         return st;
-    if (d.cache_dir && make_dirs(d.cache_dir)) {
+    if (d.cache_dir && sg_verify__make_dirs(d.cache_dir)) {
         sg_error werr;
         if (sg_image_write_exr(&r.mean, exr, &werr) == SG_OK && sg_image_write_exr(&r.std_error, se, &werr) == SG_OK) {
             char tmp[4200];
