@@ -195,9 +195,27 @@ static float box_entry(const sg_aabb *b, const sg_ray *r)
     return t0 <= t1 ? t0 : INFINITY;
 }
 
+/* Worlds of up to this many models visit them in box-entry order. */
+enum { SORTED_MAX = 16 };
+
+/* Models sorted by where the ray enters their boxes (insertion sort,
+ * stable): order[k] is the k-th model, entry[k] its box entry. */
+static void model_order(const sg_world *w, const sg_ray *r, size_t n, size_t *order, float *entry)
+{
+    for (size_t i = 0; i < n; ++i) {
+        float e = box_entry(&w->model_bounds[i], r);
+        size_t j = i;
+        for (; j > 0 && entry[j - 1] > e; --j) {
+            entry[j] = entry[j - 1];
+            order[j] = order[j - 1];
+        }
+        entry[j] = e;
+        order[j] = i;
+    }
+}
+
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats)
 {
-    enum { SORTED_MAX = 16 };
     sg_ray r = *ray;
     sg_ray_stats local = {0};
     int found = 0;
@@ -207,16 +225,7 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
     size_t order[SORTED_MAX];
     float entry[SORTED_MAX];
     size_t n = w->count <= SORTED_MAX ? w->count : 0;
-    for (size_t i = 0; i < n; ++i) {
-        float e = box_entry(&w->model_bounds[i], &r);
-        size_t j = i;
-        for (; j > 0 && entry[j - 1] > e; --j) {
-            entry[j] = entry[j - 1];
-            order[j] = order[j - 1];
-        }
-        entry[j] = e;
-        order[j] = i;
-    }
+    model_order(w, &r, n, order, entry);
     for (size_t k = 0; k < w->count; ++k) {
         size_t i = n ? order[k] : k;
         if (n && !(entry[k] <= r.tmax))
@@ -237,26 +246,9 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
     return found;
 }
 
-/* The model order of world_nearest for one ray: models sorted by where
- * the ray enters their boxes (insertion sort, stable). n <= SORTED_MAX. */
-static void model_order(const sg_world *w, const sg_ray *r, size_t n, size_t *order, float *entry)
-{
-    for (size_t i = 0; i < n; ++i) {
-        float e = box_entry(&w->model_bounds[i], r);
-        size_t j = i;
-        for (; j > 0 && entry[j - 1] > e; --j) {
-            entry[j] = entry[j - 1];
-            order[j] = order[j - 1];
-        }
-        entry[j] = e;
-        order[j] = i;
-    }
-}
-
 unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
                              sg_ray_stats *stats)
 {
-    enum { SORTED_MAX = 16 };
     mask &= 15u;
     size_t n = w->count <= SORTED_MAX ? w->count : 0;
     size_t order[4][SORTED_MAX];
