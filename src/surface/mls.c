@@ -359,6 +359,33 @@ static inline int push_active(const sg_splat_soa *s, size_t i, float qx, float q
     return 1;
 }
 
+#ifdef SG_MLS_AVX2
+/* Appends the lanes set in `bits` to the active list, in lane order (the
+ * scalar loop's order): packs them to the front of each vector and stores
+ * all 8 at the list's end; n only advances by the survivors. Returns 0 when
+ * they do not fit (the caller falls back to the slow path). */
+static inline int append_survivors(actives *a, int bits, __m256 qx, __m256 qy, __m256 qz, __m256 tc, __m256 perp2,
+                                   __m256 inv_r, __m256 nx, __m256 ny, __m256 nz, __m256i id)
+{
+    int n = a->n, pc = __builtin_popcount((unsigned)bits);
+    if (n + pc > MAX_ACTIVE)
+        return 0;
+    const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
+    _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
+    _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
+    _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
+    _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
+    _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
+    _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(inv_r, inv_r), perm));
+    _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(nx, perm));
+    _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(ny, perm));
+    _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(nz, perm));
+    _mm256_storeu_si256((__m256i *)(void *)(a->id + n), _mm256_permutevar8x32_epi32(id, perm));
+    a->n = n + pc;
+    return 1;
+}
+#endif
+
 static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, const sg_ray *ray, float t0,
                           float t1, actives *a, float *ta, float *tb, float *rmin)
 {
@@ -391,27 +418,10 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
         vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
         vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
         vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
-        /* Append the survivors in lane order (the scalar loop's order):
-         * pack the selected lanes to the front of each vector and store
-         * all 8 at the list's end; n only advances by the survivors. */
-        int n = a->n, pc = __builtin_popcount((unsigned)bits);
-        if (n + pc > MAX_ACTIVE)
+        if (!append_survivors(a, bits, qx, qy, qz, tc, perp2, _mm256_loadu_ps(s->inv_r + i),
+                              _mm256_loadu_ps(s->nx + i), _mm256_loadu_ps(s->ny + i), _mm256_loadu_ps(s->nz + i),
+                              _mm256_loadu_si256((const __m256i *)(const void *)(s->id + i))))
             return -1;
-        const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
-        __m256 ir = _mm256_loadu_ps(s->inv_r + i);
-        _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
-        _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
-        _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
-        _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
-        _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
-        _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(ir, ir), perm));
-        _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->nx + i), perm));
-        _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->ny + i), perm));
-        _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(s->nz + i), perm));
-        _mm256_storeu_si256((__m256i *)(void *)(a->id + n),
-                            _mm256_permutevar8x32_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(s->id + i)),
-                                                        perm));
-        a->n = n + pc;
     }
     if (i < end) {
         /* The last 1..7 splats in one masked step (no load past the
@@ -439,24 +449,11 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
             vlo = _mm256_min_ps(vlo, _mm256_blendv_ps(vlo, lo, m));
             vhi = _mm256_max_ps(vhi, _mm256_blendv_ps(vhi, hi, m));
             vr2 = _mm256_min_ps(vr2, _mm256_blendv_ps(vr2, r2, m));
-            int n = a->n, pc = __builtin_popcount((unsigned)bits);
-            if (n + pc > MAX_ACTIVE)
+            if (!append_survivors(a, bits, qx, qy, qz, tc, perp2, _mm256_maskload_ps(s->inv_r + i, lane),
+                                  _mm256_maskload_ps(s->nx + i, lane), _mm256_maskload_ps(s->ny + i, lane),
+                                  _mm256_maskload_ps(s->nz + i, lane),
+                                  _mm256_maskload_epi32((const int *)(const void *)(s->id + i), lane)))
                 return -1;
-            const __m256i perm = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)COMPRESS_LUT[bits]));
-            __m256 ir = _mm256_maskload_ps(s->inv_r + i, lane);
-            _mm256_storeu_ps(a->qx + n, _mm256_permutevar8x32_ps(qx, perm));
-            _mm256_storeu_ps(a->qy + n, _mm256_permutevar8x32_ps(qy, perm));
-            _mm256_storeu_ps(a->qz + n, _mm256_permutevar8x32_ps(qz, perm));
-            _mm256_storeu_ps(a->tc + n, _mm256_permutevar8x32_ps(tc, perm));
-            _mm256_storeu_ps(a->perp2 + n, _mm256_permutevar8x32_ps(perp2, perm));
-            _mm256_storeu_ps(a->inv_r2 + n, _mm256_permutevar8x32_ps(_mm256_mul_ps(ir, ir), perm));
-            _mm256_storeu_ps(a->nx + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nx + i, lane), perm));
-            _mm256_storeu_ps(a->ny + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->ny + i, lane), perm));
-            _mm256_storeu_ps(a->nz + n, _mm256_permutevar8x32_ps(_mm256_maskload_ps(s->nz + i, lane), perm));
-            _mm256_storeu_si256((__m256i *)(void *)(a->id + n),
-                                _mm256_permutevar8x32_epi32(_mm256_maskload_epi32((const int *)(const void *)(s->id + i), lane),
-                                                            perm));
-            a->n = n + pc;
         }
         i = end;
     }
