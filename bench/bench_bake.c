@@ -64,6 +64,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/cli.h"
 #include "bench_common.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
@@ -232,41 +233,18 @@ static int parse_int_opt(const char *s, long lo, long hi, int *out)
 
 static int parse_list(const char *s, unsigned long long lo, unsigned long long hi, size_t *vals, int *n)
 {
-    *n = 0;
-    while (*s) {
-        char *end;
-        errno = 0;
-        unsigned long long v = strtoull(s, &end, 10);
-        if (errno || end == s || v < lo || v > hi || *n == MAX_LIST)
-            return 0;
-        vals[(*n)++] = (size_t)v;
-        if (*end == ',')
-            end++;
-        else if (*end)
-            return 0;
-        s = end;
-    }
-    return *n > 0;
+    return sg_cli_size_list("list", s, lo, hi, vals, MAX_LIST, n, NULL) == SG_OK;
 }
 
 /* Direct-light sample counts: 1..65536. */
 static int parse_ints(const char *s, int *vals, int *n)
 {
-    *n = 0;
-    while (*s) {
-        char *end;
-        errno = 0;
-        long v = strtol(s, &end, 10);
-        if (errno || end == s || v < 1 || v > 65536 || *n == MAX_LIST)
-            return 0;
-        vals[(*n)++] = (int)v;
-        if (*end == ',')
-            end++;
-        else if (*end)
-            return 0;
-        s = end;
-    }
-    return *n > 0;
+    size_t v[MAX_LIST];
+    if (!parse_list(s, 1, 65536, v, n))
+        return 0;
+    for (int i = 0; i < *n; ++i)
+        vals[i] = (int)v[i];
+    return 1;
 }
 
 /* "0,all,2.5": sample spacings; "all" is -1 (every splat). */

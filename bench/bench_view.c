@@ -48,6 +48,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "core/cli.h"
 #include "bench_common.h"
 #include "bake/bake.h"
 #include "display/ocio.h"
@@ -138,21 +139,7 @@ static int parse_size(const char *s, unsigned long long lo, unsigned long long h
 
 static int parse_sizes(const char *s, options *o)
 {
-    o->size_count = 0;
-    while (*s) {
-        char *end;
-        errno = 0;
-        unsigned long long v = strtoull(s, &end, 10);
-        if (errno || end == s || v < 100 || v > 100000000ull || o->size_count == MAX_SIZES)
-            return 0;
-        o->sizes[o->size_count++] = (size_t)v;
-        if (*end == ',')
-            end++;
-        else if (*end)
-            return 0;
-        s = end;
-    }
-    return o->size_count > 0;
+    return sg_cli_size_list("--sizes", s, 100, 100000000ull, o->sizes, MAX_SIZES, &o->size_count, NULL) == SG_OK;
 }
 
 /* Returns -1 to continue, else the exit status. */

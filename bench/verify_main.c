@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/cli.h"
 #include "verify/cases.h"
 #include "verify/verify.h"
 
@@ -33,21 +34,7 @@ static const char usage[] =
 
 static int parse_sizes(const char *s, sg_verify_desc *d)
 {
-    d->n_sizes = 0;
-    while (*s) {
-        char *end;
-        errno = 0;
-        unsigned long long v = strtoull(s, &end, 10);
-        if (errno || end == s || v < 100 || v > 100000000ull || d->n_sizes == SG_VERIFY_MAX_SIZES)
-            return 0;
-        d->sizes[d->n_sizes++] = (size_t)v;
-        if (*end == ',')
-            end++;
-        else if (*end)
-            return 0;
-        s = end;
-    }
-    return d->n_sizes > 0;
+    return sg_cli_size_list("--sizes", s, 100, 100000000ull, d->sizes, SG_VERIFY_MAX_SIZES, &d->n_sizes, NULL) == SG_OK;
 }
 
 int main(int argc, char **argv)

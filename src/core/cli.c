@@ -28,6 +28,29 @@ sg_status sg_cli_float_above(const char *opt, const char *s, float lo, float *ou
     return SG_OK;
 }
 
+sg_status sg_cli_size_list(const char *opt, const char *s, unsigned long long lo, unsigned long long hi, size_t *vals,
+                           int cap, int *n, sg_error *err)
+{
+    int count = 0;
+    for (const char *p = s; p && *p && count < cap;) {
+        char *end;
+        errno = 0;
+        unsigned long long v = strtoull(p, &end, 10);
+        if (errno || end == p || v < lo || v > hi)
+            break;
+        vals[count++] = (size_t)v;
+        if (*end == '\0') {
+            *n = count;
+            return SG_OK;
+        }
+        if (*end != ',')
+            break;
+        p = end + 1;
+    }
+    return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: '%s' is not a list of at most %d integers in [%llu, %llu]", opt,
+                        s ? s : "", cap, lo, hi);
+}
+
 sg_status sg_cli_vec3(const char *opt, const char *s, sg_vec3 *out, sg_error *err)
 {
     float v[3];

@@ -51,12 +51,36 @@ static void test_cli_vec3(void **state)
     assert_true(v.x == 1.0f && v.y == -2.5f && v.z == 30.0f);
 }
 
+static void test_cli_size_list(void **state)
+{
+    (void)state;
+    size_t v[3] = {0};
+    int n = -1;
+    sg_error err = {0};
+    assert_int_equal(sg_cli_size_list("--sizes", "2000,8000,24000000", 100, 100000000ull, v, 3, &n, &err), SG_OK);
+    assert_int_equal(n, 3);
+    assert_true(v[0] == 2000 && v[1] == 8000 && v[2] == 24000000);
+    assert_int_equal(sg_cli_size_list("--sizes", "500", 100, 1000, v, 3, &n, &err), SG_OK);
+    assert_int_equal(n, 1);
+    /* out of range, too many, empty items, trailing comma, junk, nothing */
+    const char *bad[] = {"99", "1001", "200,300,400,500", "200,,300", "200,", ",200", "200x", "", "-200", NULL};
+    for (int i = 0; bad[i]; ++i) {
+        n = -1;
+        assert_int_equal(sg_cli_size_list("--sizes", bad[i], 100, 1000, v, 3, &n, &err), SG_ERR_INVALID_ARG);
+        assert_int_equal(n, -1); /* untouched */
+        assert_non_null(strstr(err.message, "--sizes: '"));
+        assert_non_null(strstr(err.message, "at most 3 integers in [100, 1000]"));
+    }
+    assert_int_equal(sg_cli_size_list("--sizes", NULL, 1, 2, v, 3, &n, &err), SG_ERR_INVALID_ARG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cli_long_accepts_range_and_names_errors),
         cmocka_unit_test(test_cli_float_above),
         cmocka_unit_test(test_cli_vec3),
+        cmocka_unit_test(test_cli_size_list),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
