@@ -537,56 +537,14 @@ static int scene_json(const options *o, const scene_setup *s, size_t points, cha
 
 /* ---- the reference at pixel centres --------------------------------------- */
 
-/* sg_ref_render's estimator and loop (16x16 tiles, dynamic schedule, path
- * index pixel * SG_REF_MAX_SPP + s) with every path through the pixel's
- * centre instead of a jittered point: the same per-pixel mean and standard
- * error, of the radiance the bake's lookup frame shows. */
-enum { TILE = 16 };
+/* The path tracer's estimate through every pixel's centre (sg_ref_desc
+ * pixel_centres): the radiance the bake's lookup frame shows. */
 static sg_status centre_render(const sg_world *w, const sg_camera *cam, int size, int spp, uint64_t seed,
                                int threads, sg_ref_result *out, sg_error *err)
 {
     sg_ref_desc d = {.camera = *cam, .width = size, .height = size, .spp = spp, .max_depth = MAX_DEPTH,
-                     .rr_depth = RR_DEPTH, .seed = seed, .threads = threads};
-    sg_ref_result r = {0};
-    sg_status st = sg_image_alloc(&r.mean, size, size, err);
-    if (st == SG_OK)
-        st = sg_image_alloc(&r.std_error, size, size, err);
-    if (st != SG_OK) {
-        sg_ref_result_free(&r);
-        return st;
-    }
-    int tiles_x = (size + TILE - 1) / TILE, tiles = tiles_x * tiles_x;
-    double t0 = omp_get_wtime();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (int t = 0; t < tiles; ++t) {
-        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        for (int y = y0; y < y0 + TILE && y < size; ++y)
-            for (int x = x0; x < x0 + TILE && x < size; ++x) {
-                uint64_t pixel = (uint64_t)y * (uint64_t)size + (uint64_t)x;
-                double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-                for (int s = 0; s < spp; ++s) {
-                    sg_vec3 L = sg_ref_path(w, &d, (float)x + 0.5f, (float)y + 0.5f,
-                                            pixel * SG_REF_MAX_SPP + (uint64_t)s, NULL);
-                    double v[3] = {L.x, L.y, L.z};
-                    for (int c = 0; c < 3; ++c) {
-                        sum[c] += v[c];
-                        sum2[c] += v[c] * v[c];
-                    }
-                }
-                float *m = r.mean.data + 3 * pixel, *e = r.std_error.data + 3 * pixel;
-                double n = (double)spp;
-                for (int c = 0; c < 3; ++c) {
-                    double mean = sum[c] / n;
-                    double var = n > 1 ? fmax(0.0, (sum2[c] - n * mean * mean) / (n - 1.0)) : 0.0;
-                    m[c] = (float)mean;
-                    e[c] = (float)sqrt(var / n);
-                }
-            }
-    }
-    r.seconds = omp_get_wtime() - t0;
-    r.paths = (uint64_t)size * (uint64_t)size * (uint64_t)spp;
-    *out = r;
-    return SG_OK;
+                     .rr_depth = RR_DEPTH, .seed = seed, .threads = threads, .pixel_centres = 1};
+    return sg_ref_render(w, &d, out, err);
 }
 
 /* The key of a cached reference: the scene (all parts) with the reference's

@@ -141,7 +141,8 @@ sg_status sg_ref_render(const sg_world *w, const sg_ref_desc *desc, sg_ref_resul
                 double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
                 for (int s = 0; s < d.spp; ++s) {
                     uint64_t path = pixel * SG_REF_MAX_SPP + d.first_sample + (uint64_t)s;
-                    float jx = sg_rng_float(d.seed, path, 0, 0), jy = sg_rng_float(d.seed, path, 0, 1);
+                    float jx = d.pixel_centres ? 0.5f : sg_rng_float(d.seed, path, 0, 0),
+                          jy = d.pixel_centres ? 0.5f : sg_rng_float(d.seed, path, 0, 1);
                     sg_vec3 L = sg_ref_path(w, &d, (float)x + jx, (float)y + jy, path, &tile_stats[t]);
                     double v[3] = {L.x, L.y, L.z};
                     for (int c = 0; c < 3; ++c) {

@@ -2,7 +2,8 @@
  * same surfaces, materials and envmap as the bake and the viewer.
  *
  * Estimator, per pixel: the mean of spp independent paths. Each path starts
- * at a uniformly jittered point of the pixel; at every surface vertex it
+ * at a uniformly jittered point of the pixel (or at its centre, with
+ * pixel_centres); at every surface vertex it
  * adds the emission, samples the envmap (importance-sampled, shadow ray)
  * and the BSDF, and weights the two strategies by the power heuristic
  * (Veach 1997); a BSDF-sampled ray that escapes adds the envmap with the
@@ -43,6 +44,11 @@ typedef struct sg_ref_desc {
     int rr_depth;         /* Russian roulette from this bounce; default 3  */
     uint64_t seed;        /* default 1                                     */
     int threads;          /* OpenMP threads; 0 = default                   */
+    int pixel_centres;    /* 1: every path through its pixel's centre, the
+                             point the bake's lookup frame and the direct
+                             renderers sample (no jitter: the estimate of
+                             the radiance they try to show, not of the
+                             pixel's average)                              */
 } sg_ref_desc;
 
 typedef struct sg_ref_result {

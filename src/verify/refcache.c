@@ -13,7 +13,6 @@
 
 #include <inttypes.h>
 #include <math.h>
-#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,53 +83,6 @@ uint64_t sg_verify_ref_key(const sg_verify_ref_desc *d0)
     return sg_mix64(h);
 }
 
-enum { TILE = 16 };
-
-static sg_status render_centred(const sg_world *w, const sg_verify_ref_desc *d, sg_ref_result *out, sg_error *err)
-{
-    sg_ref_desc rd = {.camera = d->camera, .width = d->width, .height = d->height, .spp = d->spp,
-                      .max_depth = d->max_depth, .rr_depth = 3, .seed = d->seed};
-    sg_ref_result r = {0};
-    sg_status st = sg_image_alloc(&r.mean, d->width, d->height, err);
-    if (st == SG_OK)
-        st = sg_image_alloc(&r.std_error, d->width, d->height, err);
-    if (st != SG_OK) {
-        sg_ref_result_free(&r);
-        return st;
-    }
-    int tx = (d->width + TILE - 1) / TILE, ty = (d->height + TILE - 1) / TILE;
-    double t0 = omp_get_wtime();
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int t = 0; t < tx * ty; t++) {
-        int x0 = (t % tx) * TILE, y0 = (t / tx) * TILE;
-        for (int y = y0; y < y0 + TILE && y < d->height; y++)
-            for (int x = x0; x < x0 + TILE && x < d->width; x++) {
-                uint64_t pixel = (uint64_t)y * (uint64_t)d->width + (uint64_t)x;
-                double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-                for (int s = 0; s < d->spp; s++) {
-                    sg_vec3 L = sg_ref_path(w, &rd, (float)x + 0.5f, (float)y + 0.5f,
-                                            pixel * SG_REF_MAX_SPP + (uint64_t)s, NULL);
-                    double v[3] = {L.x, L.y, L.z};
-                    for (int c = 0; c < 3; c++) {
-                        sum[c] += v[c];
-                        sum2[c] += v[c] * v[c];
-                    }
-                }
-                double n = d->spp;
-                for (int c = 0; c < 3; c++) {
-                    double mean = sum[c] / n;
-                    double var = n > 1 ? fmax(0.0, (sum2[c] - n * mean * mean) / (n - 1.0)) : 0.0;
-                    r.mean.data[3 * pixel + c] = (float)mean;
-                    r.std_error.data[3 * pixel + c] = (float)sqrt(var / n);
-                }
-            }
-    }
-    r.seconds = omp_get_wtime() - t0;
-    r.paths = (uint64_t)d->width * (uint64_t)d->height * (uint64_t)d->spp;
-    *out = r;
-    return SG_OK;
-}
-
 sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, sg_ref_result *out, int *cached,
                               char *path, size_t path_cap, sg_error *err)
 {
@@ -170,7 +122,9 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
     } else if (path && path_cap)
         path[0] = 0;
     sg_ref_result r = {0};
-    sg_status st = render_centred(w, &d, &r, err);
+    sg_ref_desc rd = {.camera = d.camera, .width = d.width, .height = d.height, .spp = d.spp,
+                      .max_depth = d.max_depth, .rr_depth = 3, .seed = d.seed, .pixel_centres = 1};
+    sg_status st = sg_ref_render(w, &rd, &r, err);
     if (st != SG_OK)
         return st;
     if (d.cache_dir && sg_verify__make_dirs(d.cache_dir)) {
