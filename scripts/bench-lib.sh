@@ -4,7 +4,8 @@
 # bench_run NAME ARGS...  builds bench/NAME (Release, SG_BUILD_BENCH) into
 #   $build (SG_BENCH_BUILD_DIR, default build-bench), chooses the output
 #   folder $outdir (docs; out with --quick; a given --out-dir wins), and
-#   runs NAME --out-dir $outdir ARGS... (--help: NAME's help, then exit).
+#   runs NAME --out-dir $outdir ARGS... (NAME ARGS... when ARGS has its own
+#   --out-dir; --help: NAME's help, then exit).
 # bench_term W H  sets $term for a W x H chart: pngcairo (smoother text and
 #   dashes) when gnuplot has it, else plain png (libgd).
 
@@ -22,13 +23,21 @@ bench_run() {
       --help) exec "$build/bench/$name" --help ;;
     esac
   done
+  local given=0
   for ((i = 0; i < ${#args[@]}; i++)); do
     if [ "${args[$i]}" = "--out-dir" ] && [ $((i + 1)) -lt ${#args[@]} ]; then
       outdir="${args[$((i + 1))]}"
+      given=1
     fi
   done
   mkdir -p "$outdir"
-  "$build/bench/$name" --out-dir "$outdir" "$@"
+  # A given --out-dir is passed once, as given (the program's report
+  # quotes its arguments).
+  if [ "$given" = 1 ]; then
+    "$build/bench/$name" "$@"
+  else
+    "$build/bench/$name" --out-dir "$outdir" "$@"
+  fi
 }
 
 bench_term() {
