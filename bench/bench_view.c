@@ -7,10 +7,10 @@
  * standing on y = 0 (as bench_ref), on the builtin ground (Lambert 0.5),
  * under courtyard.exr (the builtin "sky" when absent). Two materials for
  * the dragon: "diffuse" (Lambert, albedo 0.7) and "glossy" (GGX, albedo
- * 0.7, roughness 0.3, specular 0.04). The bake looks a glossy lobe up as
- * if diffuse (bake.h: no directional bins yet), so both cost the same per
- * lookup; the glossy rows measure that, and will change when the bake
- * learns glossy lobes. Each (size, material) is its own world (the
+ * 0.7, roughness 0.3, specular 0.04). A glossy lookup also reads the
+ * directional bins of the sample points under the hit (bake/glossy.h), and
+ * its bake traces the bins' rays, so both cost more than the diffuse
+ * ones. Each (size, material) is its own world (the
  * material lives in the world) and its own bake (--photons, --direct).
  *
  * Camera path: made here, deterministically, and written as a campath file
@@ -22,8 +22,8 @@
  * (default 2), sizes >= --huge-size (default 4M) every --huge-stride-th
  * (default 4; both stated in the output), to keep the full run within
  * minutes on 2 cores; --quick walks every 6th key. --glossy-up-to N skips
- * the glossy world and bake above N points (their frames cost what the
- * diffuse ones do while the bake has no glossy lobes).
+ * the glossy world and bake above N points (the glossy bake is the slow
+ * one: bins at every glossy sample point).
  *
  * Frame: sg_view_frame_render at scale 1 (what the viewer does per still
  * frame: sg_view_render + OCIO display transform to RGBA8, frame.h), the
@@ -443,9 +443,9 @@ static void write_md(FILE *f, const void *ctx)
             rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0], rp->nproc, rp->args);
     fprintf(f, "Scene: the Stanford dragon sampled to N points, %g units long, standing on the builtin ground, "
                "under `%s`. Bakes: %zu photons, direct_samples %d; *diffuse* = Lambert albedo %g, *glossy* = GGX "
-               "albedo %g, roughness %g, specular %g. **The bake looks a glossy lobe up as if diffuse** "
-               "(bake.h: no directional bins yet), so a glossy lookup costs what a diffuse one does: the glossy "
-               "rows differ from the diffuse ones by noise only.\n\n",
+               "albedo %g, roughness %g, specular %g. A glossy lookup also reads the directional bins "
+               "of the sample points under the hit (bake/glossy.h), so its frames cost more than the diffuse "
+               "ones.\n\n",
             (double)SCENE_LENGTH, rp->env_used, o->photons, o->direct, (double)DRAGON_ALBEDO,
             (double)DRAGON_ALBEDO, (double)GGX_ROUGHNESS, (double)GGX_SPECULAR);
     fprintf(f, "Path: %zu keys (24 orbiting low, 24 orbiting high, 12 on a close pass), written to "
@@ -460,7 +460,7 @@ static void write_md(FILE *f, const void *ctx)
                "render and display = the frame's two parts (means).\n\n",
             rp->keys, o->big_size, o->big_stride, o->huge_size, o->huge_stride,
             o->glossy_up_to == (size_t)-1 ? "" : "; the glossy material only up to the size in "
-                                                   "`--glossy-up-to` (its lookup costs what the diffuse one does)");
+                                                   "`--glossy-up-to`");
     fputs("| points | material | size | frames | mean ms | p95 ms | mean fps | render ms | display ms | min ms | "
           "max ms | CPU ms |\n|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
           f);
