@@ -33,8 +33,10 @@
  * rank) of those times; also the mean render (lookup) and display parts,
  * and the process's CPU time per frame (all threads: on a shared machine
  * the wall time also counts what other processes took of the cores).
- * After each still frame the same key at MOVE_SCALE, the frame the viewer
- * shows while the camera moves: its mean, p95 and fps.
+ * After each still frame the same key as the viewer shows it while the
+ * camera moves (--move-scale auto: sg_view_move_scale from the previous
+ * moving frame, as if the camera moved along the whole path): its mean,
+ * p95, fps and the mean scale chosen.
  *
  * Output: a table on stdout, DIR/bench_view.csv and DIR/bench_view.md
  * (written to a temporary name and renamed).
@@ -74,7 +76,7 @@
 #define N_RES 2
 #define N_MAT 2
 #define KEY_SECONDS 0.1 /* path time between keys */
-#define MOVE_SCALE 2     /* splatgi-view's default --move-scale: its frames while the camera moves */
+#define MOVE_BUDGET (1.0 / 30.0) /* splatgi-view's --move-scale auto aims its moving frames at this */
 
 static const int res_w[N_RES] = {512, 1024};
 static const int res_h[N_RES] = {512, 768};
@@ -114,7 +116,8 @@ typedef struct row {
     int width, height, frames, stride;
     double mean_ms, p95_ms, min_ms, max_ms, render_ms, display_ms, fps;
     double cpu_ms;             /* process CPU time per frame, all threads */
-    double move_mean_ms, move_p95_ms, move_fps; /* the same keys at MOVE_SCALE */
+    double move_mean_ms, move_p95_ms, move_fps; /* the same keys as the viewer shows them moving */
+    double move_scale;         /* mean scale --move-scale auto chose      */
 } row;
 
 typedef struct report {
@@ -368,8 +371,9 @@ static void summarise(double *t, size_t m, double *mean_ms, double *p95_ms)
 }
 
 /* Each key: the still frame (scale 1, timed with its CPU time and parts),
- * then the frame the viewer shows while moving (MOVE_SCALE: 1/MOVE_SCALE
- * of the pixels traced, upscaled to the window). */
+ * then the frame the viewer shows while moving: the scale chosen by
+ * sg_view_move_scale from the moving frame before (the first from the
+ * warm-up frame), the image upscaled to the window. */
 static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, const sg_campath *p, int stride,
                       int threads, row *r, sg_error *err)
 {
@@ -389,8 +393,11 @@ static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, 
         st = sg_campath_camera(&p->keys[0], aspect, &cam, err);
     if (st == SG_OK)
         st = sg_view_frame_render(&f, b, w, &cam, 1, threads, d, err);
-    double render = 0, display = 0, cpu = 0;
+    double render = 0, display = 0, cpu = 0, scales = 0;
     size_t m = 0;
+    int move = f.scale; /* the viewer's state when the camera starts moving */
+    double move_s = f.render_seconds + f.display_seconds;
+    size_t move_px = f.rays;
     for (size_t i = 0; i < p->count && st == SG_OK; i += (size_t)stride) {
         st = sg_campath_camera(&p->keys[i], aspect, &cam, err);
         if (st != SG_OK)
@@ -403,13 +410,18 @@ static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, 
         display += f.display_seconds;
         if (st != SG_OK)
             break;
+        move = sg_view_move_scale(move, move_s, move_px, r->width, r->height, MOVE_BUDGET);
         t0 = omp_get_wtime();
-        st = sg_view_frame_render(&f, b, w, &cam, MOVE_SCALE, threads, d, err);
+        st = sg_view_frame_render(&f, b, w, &cam, move, threads, d, err);
         tm[m++] = omp_get_wtime() - t0;
+        move_s = f.render_seconds + f.display_seconds;
+        move_px = f.rays;
+        scales += move;
     }
     if (st == SG_OK) {
         summarise(tm, m, &r->move_mean_ms, &r->move_p95_ms);
         r->move_fps = 1e3 / r->move_mean_ms;
+        r->move_scale = scales / (double)m;
         summarise(t, m, &r->mean_ms, &r->p95_ms);
         r->frames = (int)m;
         r->stride = stride;
@@ -438,11 +450,11 @@ static void write_csv(FILE *f, const void *ctx)
     for (int i = 0; i < rp->nrows; i++) {
         const row *r = &rp->rows[i];
         fprintf(f, "%zu,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.3f,%zu,%.2f,%.2f,%.2f,%.2f,%zu,%d,%d,%.2f,"
-                   "%.2f,\"%s\",\"%s\",%d,%.3f,%.3f,%.2f\n",
+                   "%.2f,\"%s\",\"%s\",%.2f,%.3f,%.3f,%.2f\n",
                 r->points, mat_name[r->mat], r->width, r->height, r->frames, r->stride, r->mean_ms, r->p95_ms,
                 r->min_ms, r->max_ms, r->render_ms, r->display_ms, r->fps, r->cpu_ms, r->splats, r->world_s,
                 r->bake_s, r->trace_s, r->gather_s, rp->o->photons, rp->o->direct, rp->o->threads, rp->load0[0],
-                rp->load1[0], rp->env_used, rp->machine, MOVE_SCALE, r->move_mean_ms, r->move_p95_ms, r->move_fps);
+                rp->load1[0], rp->env_used, rp->machine, r->move_scale, r->move_mean_ms, r->move_p95_ms, r->move_fps);
     }
 }
 
@@ -481,23 +493,26 @@ static void write_md(FILE *f, const void *ctx)
                "as 2x2 quads sharing the kd-tree traversal, and the bake's lookup, the image of "
                "`sg_bake_render` bit for bit; then the OCIO display transform to RGBA8, default display and "
                "view), timed with `omp_get_wtime` after one warm-up frame; p95 = nearest-rank 95th percentile; "
-               "render and display = the frame's two parts (means). *Moving* = the same keys at scale %d, "
-               "the frame splatgi-view shows while the camera moves (1/%d of the pixels traced, upscaled to the "
-               "window), timed after each still frame.\n\n",
+               "render and display = the frame's two parts (means). *Moving* = the frame splatgi-view shows "
+               "while the camera moves, timed after each still frame: `--move-scale auto` (the default) renders "
+               "1/s of the width and height, s the smallest of 2, 4 and 8 whose frame is predicted to fit %.1f ms "
+               "from the moving frame before (chained along the path, as if the camera never stopped), and "
+               "upscales it to the window; *scale* = the mean s.\n\n",
             rp->keys, o->big_size, o->big_stride, o->huge_size, o->huge_stride,
             o->glossy_up_to == (size_t)-1 ? "" : "; the glossy material only up to the size in "
                                                    "`--glossy-up-to`",
-            MOVE_SCALE, MOVE_SCALE * MOVE_SCALE);
+            1e3 * MOVE_BUDGET);
     fputs("| points | material | size | frames | mean ms | p95 ms | mean fps | render ms | display ms | min ms | "
-          "max ms | CPU ms | moving mean ms | moving p95 ms | moving fps |\n"
-          "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+          "max ms | CPU ms | moving mean ms | moving p95 ms | moving fps | scale |\n"
+          "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
           f);
     for (int i = 0; i < rp->nrows; i++) {
         const row *r = &rp->rows[i];
-        fprintf(f, "| %zu | %s | %dx%d | %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
+        fprintf(f, "| %zu | %s | %dx%d | %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | "
+                   "%.2f |\n",
                 r->points, mat_name[r->mat], r->width, r->height, r->frames, r->mean_ms, r->p95_ms, r->fps,
                 r->render_ms, r->display_ms, r->min_ms, r->max_ms, r->cpu_ms, r->move_mean_ms, r->move_p95_ms,
-                r->move_fps);
+                r->move_fps, r->move_scale);
     }
     fputs("\n## Build and bake\n\n| points | material | splats (all models) | world build s | bake s | trace s | "
           "gather + direct s |\n|---:|---|---:|---:|---:|---:|---:|\n",
@@ -524,9 +539,10 @@ static void write_md(FILE *f, const void *ctx)
     if (!a && !b)
         fputs("- not measured (no 1000000-point run).\n", f);
     if (a && b)
-        fprintf(f, "- While the camera moves (scale %d): %.1f fps at 512x512, %.1f fps at 1024x768 (p95 %.1f and "
-                   "%.1f ms); the viewer refines to the full frame once the camera has been still for 0.2 s.\n",
-                MOVE_SCALE, a->move_fps, b->move_fps, a->move_p95_ms, b->move_p95_ms);
+        fprintf(f, "- While the camera moves (`--move-scale auto`, mean scale %.2f and %.2f): %.1f fps at 512x512, "
+                   "%.1f fps at 1024x768 (p95 %.1f and %.1f ms); the viewer refines to the full frame once the "
+                   "camera has been still for 0.2 s.\n",
+                a->move_scale, b->move_scale, a->move_fps, b->move_fps, a->move_p95_ms, b->move_p95_ms);
     /* The frame's profile split is measured by bench_view_split and kept
      * in OUT_DIR/bench_view_split.md; shown here when present. */
     char split[4200];

@@ -35,6 +35,7 @@
 
 #define OUT_DIR "out"
 #define MOVE_HOLD_SECONDS 0.2 /* reduced resolution until the camera has been still this long */
+#define MOVE_BUDGET_SECONDS (1.0 / 30.0) /* --move-scale auto: frame time aimed at while moving */
 
 static const char usage[] =
     "usage: splatgi-view SCENE.json --bake SCENE.sgbake [options]\n"
@@ -45,7 +46,8 @@ static const char usage[] =
     "  --width W --height H   window / frame size (default: the file's render size)\n"
     "  --display D --view V   OCIO display and view (default: the config's defaults)\n"
     "  --exposure E        exposure in stops (default 0)\n"
-    "  --move-scale S      resolution divisor while moving: 1, 2, 4 or 8 (default 2)\n"
+    "  --move-scale S      resolution divisor while moving: 1, 2, 4, 8, or auto (the\n"
+    "                      default: the smallest of 2, 4, 8 whose frame fits 1/30 s)\n"
     "  --threads N         render threads (default: all)\n"
     "  --path FILE         play a camera path (window), or render it (--headless)\n"
     "  --headless          no window: render every key of --path to --out DIR\n"
@@ -137,8 +139,12 @@ static int parse_args(int argc, char **argv, options *o)
             if (!parse_long(a, v, 1, 16384, &n)) return 1;
             *(a[2] == 'w' ? &o->width : &o->height) = (int)n;
         } else if (!strcmp(a, "--move-scale")) {
-            if (!parse_long(a, v, 1, 8, &n)) return 1;
-            if (n & (n - 1)) return fail("--move-scale: '%s' is not 1, 2, 4 or 8", v);
+            char *end;
+            n = strcmp(v, "auto") ? strtol(v, &end, 10) : 0; /* 0: auto */
+            if (n && (end == v || *end || n < 1 || n > 8 || (n & (n - 1))))
+                return fail("--move-scale: '%s' is not 1, 2, 4, 8 or auto", v);
+            if (!n && strcmp(v, "auto"))
+                return fail("--move-scale: '%s' is not 1, 2, 4, 8 or auto", v);
             o->move_scale = (int)n;
         } else if (!strcmp(a, "--threads")) {
             if (!parse_long(a, v, 1, 4096, &n)) return 1;
@@ -574,7 +580,11 @@ static int run_window(viewer *v)
         if (sg_camera_look_at(view.eye, view.look, view.up, view.fov_deg, (float)a.tex_w / (float)a.tex_h, &cam,
                               &err) != SG_OK)
             goto fail_err;
-        int scale = moving ? (o->move_scale ? o->move_scale : 2) : 1;
+        int scale = 1;
+        if (moving)
+            scale = o->move_scale ? o->move_scale
+                                  : sg_view_move_scale(a.frame.scale, a.frame.render_seconds + a.frame.display_seconds,
+                                                       a.frame.rays, a.tex_w, a.tex_h, MOVE_BUDGET_SECONDS);
         double t0 = omp_get_wtime();
         int upload = 0;
         if (moved || a.dirty || (!moving && a.frame.scale != 1)) {
@@ -617,12 +627,13 @@ static int run_window(viewer *v)
         acc_ms += (omp_get_wtime() - t0) * 1e3;
         title_frames++;
         if (now - title_at >= 0.5) {
-            char title[160];
+            char title[160], res[24] = "";
             double fps = (double)title_frames / (now - title_at);
+            if (scale > 1)
+                snprintf(res, sizeof res, ", 1/%d res", scale);
             snprintf(title, sizeof title, "splatgi-view  %.1f ms  %.0f fps  %.1f Mrays/s  [%s%s%s]",
                      acc_ms / (double)title_frames, fps, acc_render > 0.0 ? acc_rays / acc_render * 1e-6 : 0.0,
-                     a.nav.mode == SG_NAV_ORBIT ? "orbit" : "walk", scale > 1 ? ", reduced" : "",
-                     a.recording ? ", REC" : "");
+                     a.nav.mode == SG_NAV_ORBIT ? "orbit" : "walk", res, a.recording ? ", REC" : "");
             glfwSetWindowTitle(a.win, title);
             title_at = now;
             title_frames = 0;
@@ -652,7 +663,7 @@ done:
 int main(int argc, char **argv)
 {
     viewer v = {0};
-    v.opt.move_scale = 2;
+    v.opt.move_scale = 0; /* auto */
     int r = parse_args(argc, argv, &v.opt);
     if (r)
         return r == 2 ? 0 : 1;

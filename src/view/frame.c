@@ -8,6 +8,7 @@
 #include "view/frame.h"
 
 #include <errno.h>
+#include <math.h>
 #include <omp.h>
 #include <png.h>
 #include <stdio.h>
@@ -83,6 +84,20 @@ sg_status sg_view_frame_redisplay(sg_view_frame *f, const sg_display *d, sg_erro
     }
     f->display_seconds = omp_get_wtime() - t0;
     return st;
+}
+
+int sg_view_move_scale(int current, double last_seconds, size_t last_pixels, int width, int height, double budget)
+{
+    if (!last_pixels || !(last_seconds > 0.0) || !isfinite(last_seconds) || width < 1 || height < 1)
+        return 2;
+    double per_pixel = last_seconds / (double)last_pixels;
+    for (int s = 2; s < 8; s *= 2) {
+        double pixels = (double)((width + s - 1) / s) * (double)((height + s - 1) / s);
+        double limit = s < current ? 0.8 * budget : budget; /* hysteresis going finer */
+        if (per_pixel * pixels <= limit)
+            return s;
+    }
+    return 8;
 }
 
 sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_world *w, const sg_camera *cam,

@@ -9,7 +9,8 @@
  * pixel (x / scale, y / scale). The camera is the same at every scale (its
  * aspect is the window's), so a reduced frame is a blockier version of the
  * full one; at scale 1 the frame is exactly sg_bake_render's image.
- * The viewer uses scale 2 or 4 while the camera moves and 1 when it stops.
+ * The viewer uses scale 2, 4 or 8 while the camera moves (sg_view_move_scale
+ * picks it from the last frame's time) and 1 when it stops.
  * What it does NOT do: windows or GL (the program does), temporal
  * accumulation, filtering.
  *
@@ -53,6 +54,18 @@ sg_status sg_view_frame_resize(sg_view_frame *f, int width, int height, sg_error
  * f->linear and f->rgba. threads: 0 = OpenMP default. */
 sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_world *w, const sg_camera *cam,
                                int scale, int threads, const sg_display *d, sg_error *err);
+
+/* The resolution scale for the frames shown while the camera moves: the
+ * smallest of 2, 4 and 8 whose frame is predicted to take at most budget
+ * seconds, else 8. The prediction scales the last frame's time
+ * (last_seconds, render and display, for last_pixels traced pixels) by
+ * the pixels a scale traces, ceil(width / s) x ceil(height / s): a frame's
+ * cost is nearly proportional to its primary rays. Going finer than
+ * `current` (the scale in use) needs the prediction to fit 0.8 x budget,
+ * so that a frame time near the budget does not flip the scale back and
+ * forth. Without a usable measurement (last_pixels 0, last_seconds not
+ * finite or <= 0) the answer is 2. */
+int sg_view_move_scale(int current, double last_seconds, size_t last_pixels, int width, int height, double budget);
 
 /* Re-applies the display (after an exposure change) to the last render. */
 sg_status sg_view_frame_redisplay(sg_view_frame *f, const sg_display *d, sg_error *err);
