@@ -90,11 +90,11 @@ int sg_view_move_scale(int current, double last_seconds, size_t last_pixels, int
 {
     if (!last_pixels || !(last_seconds > 0.0) || !isfinite(last_seconds) || width < 1 || height < 1)
         return 2;
-    double per_pixel = last_seconds / (double)last_pixels;
     for (int s = 2; s < 8; s *= 2) {
         double pixels = (double)((width + s - 1) / s) * (double)((height + s - 1) / s);
+        double predicted = last_seconds * pow(pixels / (double)last_pixels, SG_VIEW_MOVE_COST_EXPONENT);
         double limit = s < current ? 0.8 * budget : budget; /* hysteresis going finer */
-        if (per_pixel * pixels <= limit)
+        if (predicted <= limit)
             return s;
     }
     return 8;
