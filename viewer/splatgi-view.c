@@ -4,7 +4,8 @@
  * no rendering algorithm lives here. Run with --help for the options.
  *
  * Each window frame: navigator update -> sg_view_frame_render (1/scale
- * resolution while the camera moves, full when it stops) -> display
+ * resolution while the camera moves, the scale from sg_view_move_scale
+ * unless --move-scale fixes it; full when it stops) -> display
  * transform to RGBA8 -> glTexSubImage2D -> one textured quad (legacy GL,
  * which Mesa's llvmpipe under Xvfb runs) -> swap.
  */

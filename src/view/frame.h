@@ -55,6 +55,14 @@ sg_status sg_view_frame_resize(sg_view_frame *f, int width, int height, sg_error
 sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_world *w, const sg_camera *cam,
                                int scale, int threads, const sg_display *d, sg_error *err);
 
+/* Frame time against traced pixels, t ~ P^0.75: bench_view measured 2.9x
+ * and 3.0x the time for 4x the pixels (1M-point dragon, scale 1 against 2,
+ * at 512x512 and 1024x768). With t ~ P the coarse frames, dearer per
+ * pixel, predicted too much for the finer scales: the 1M walk at 1024x768
+ * ran at a mean scale of 6.3 (64 fps); with P^0.75 at 4.5 (42 fps, p95
+ * 33 ms, within the 1/30 s budget). */
+#define SG_VIEW_MOVE_COST_EXPONENT 0.75
+
 /* The resolution scale for the frames shown while the camera moves: the
  * smallest of 2, 4 and 8 whose frame is predicted to take at most budget
  * seconds, else 8. The prediction scales the last frame's time
@@ -67,13 +75,6 @@ sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_worl
  * so that a frame time near the budget does not flip the scale back and
  * forth. Without a usable measurement (last_pixels 0, last_seconds not
  * finite or <= 0) the answer is 2. */
-/* Frame time against traced pixels, t ~ P^0.75: bench_view measured 2.9x
- * and 3.0x the time for 4x the pixels (1M-point dragon, scale 1 against 2,
- * at 512x512 and 1024x768). With t ~ P the coarse frames, dearer per
- * pixel, predicted too much for the finer scales: the 1M walk at 1024x768
- * ran at a mean scale of 6.3 (64 fps) instead of the 1/4 that fits. */
-#define SG_VIEW_MOVE_COST_EXPONENT 0.75
-
 int sg_view_move_scale(int current, double last_seconds, size_t last_pixels, int width, int height, double budget);
 
 /* Re-applies the display (after an exposure change) to the last render. */
