@@ -76,7 +76,6 @@
 #define N_RES 2
 #define N_MAT 2
 #define KEY_SECONDS 0.1 /* path time between keys */
-#define MOVE_BUDGET (1.0 / 30.0) /* splatgi-view's --move-scale auto aims its moving frames at this */
 
 static const int res_w[N_RES] = {512, 1024};
 static const int res_h[N_RES] = {512, 768};
@@ -410,7 +409,7 @@ static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, 
         display += f.display_seconds;
         if (st != SG_OK)
             break;
-        move = sg_view_move_scale(move, move_s, move_px, r->width, r->height, MOVE_BUDGET);
+        move = sg_view_move_scale(move, move_s, move_px, r->width, r->height, SG_VIEW_MOVE_BUDGET_SECONDS);
         t0 = omp_get_wtime();
         st = sg_view_frame_render(&f, b, w, &cam, move, threads, d, err);
         tm[m++] = omp_get_wtime() - t0;
@@ -501,7 +500,7 @@ static void write_md(FILE *f, const void *ctx)
             rp->keys, o->big_size, o->big_stride, o->huge_size, o->huge_stride,
             o->glossy_up_to == (size_t)-1 ? "" : "; the glossy material only up to the size in "
                                                    "`--glossy-up-to`",
-            1e3 * MOVE_BUDGET);
+            1e3 * SG_VIEW_MOVE_BUDGET_SECONDS);
     fputs("| points | material | size | frames | mean ms | p95 ms | mean fps | render ms | display ms | min ms | "
           "max ms | CPU ms | moving mean ms | moving p95 ms | moving fps | scale |\n"
           "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
@@ -541,8 +540,9 @@ static void write_md(FILE *f, const void *ctx)
     if (a && b)
         fprintf(f, "- While the camera moves (`--move-scale auto`, mean scale %.2f and %.2f): %.1f fps at 512x512, "
                    "%.1f fps at 1024x768 (p95 %.1f and %.1f ms); the viewer refines to the full frame once the "
-                   "camera has been still for 0.2 s.\n",
-                a->move_scale, b->move_scale, a->move_fps, b->move_fps, a->move_p95_ms, b->move_p95_ms);
+                   "camera has been still for %g s.\n",
+                a->move_scale, b->move_scale, a->move_fps, b->move_fps, a->move_p95_ms, b->move_p95_ms,
+                SG_VIEW_MOVE_HOLD_SECONDS);
     /* The frame's profile split is measured by bench_view_split and kept
      * in OUT_DIR/bench_view_split.md; shown here when present. */
     char split[4200];

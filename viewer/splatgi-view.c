@@ -35,8 +35,6 @@
 #include "view/navigator.h"
 
 #define OUT_DIR "out"
-#define MOVE_HOLD_SECONDS 0.2 /* reduced resolution until the camera has been still this long */
-#define MOVE_BUDGET_SECONDS (1.0 / 30.0) /* --move-scale auto: frame time aimed at while moving */
 
 static const char usage[] =
     "usage: splatgi-view SCENE.json --bake SCENE.sgbake [options]\n"
@@ -140,12 +138,13 @@ static int parse_args(int argc, char **argv, options *o)
             if (!parse_long(a, v, 1, 16384, &n)) return 1;
             *(a[2] == 'w' ? &o->width : &o->height) = (int)n;
         } else if (!strcmp(a, "--move-scale")) {
-            char *end;
-            n = strcmp(v, "auto") ? strtol(v, &end, 10) : 0; /* 0: auto */
-            if (n && (end == v || *end || n < 1 || n > 8 || (n & (n - 1))))
-                return fail("--move-scale: '%s' is not 1, 2, 4, 8 or auto", v);
-            if (!n && strcmp(v, "auto"))
-                return fail("--move-scale: '%s' is not 1, 2, 4, 8 or auto", v);
+            n = 0; /* auto */
+            if (strcmp(v, "auto")) {
+                char *end;
+                n = strtol(v, &end, 10);
+                if (end == v || *end || n < 1 || n > 8 || (n & (n - 1)))
+                    return fail("--move-scale: '%s' is not 1, 2, 4, 8 or auto", v);
+            }
             o->move_scale = (int)n;
         } else if (!strcmp(a, "--threads")) {
             if (!parse_long(a, v, 1, 4096, &n)) return 1;
@@ -571,7 +570,7 @@ static int run_window(viewer *v)
         }
         if (moved)
             last_move = now;
-        int moving = now - last_move < MOVE_HOLD_SECONDS;
+        int moving = now - last_move < SG_VIEW_MOVE_HOLD_SECONDS;
 
         glfwGetFramebufferSize(a.win, &fw, &fh);
         if (fw > 0 && fh > 0 && (fw != a.tex_w || fh != a.tex_h) && !app_resize(&a, fw, fh, &err))
@@ -585,7 +584,7 @@ static int run_window(viewer *v)
         if (moving)
             scale = o->move_scale ? o->move_scale
                                   : sg_view_move_scale(a.frame.scale, a.frame.render_seconds + a.frame.display_seconds,
-                                                       a.frame.rays, a.tex_w, a.tex_h, MOVE_BUDGET_SECONDS);
+                                                       a.frame.rays, a.tex_w, a.tex_h, SG_VIEW_MOVE_BUDGET_SECONDS);
         double t0 = omp_get_wtime();
         int upload = 0;
         if (moved || a.dirty || (!moving && a.frame.scale != 1)) {

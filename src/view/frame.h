@@ -55,6 +55,13 @@ sg_status sg_view_frame_resize(sg_view_frame *f, int width, int height, sg_error
 sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_world *w, const sg_camera *cam,
                                int scale, int threads, const sg_display *d, sg_error *err);
 
+/* While the camera moves the viewer shows reduced frames aimed at this
+ * frame time (sg_view_move_scale's budget), and returns to full
+ * resolution once the camera has been still for SG_VIEW_MOVE_HOLD_SECONDS.
+ * bench_view measures the moving frames with the same budget. */
+#define SG_VIEW_MOVE_BUDGET_SECONDS (1.0 / 30.0)
+#define SG_VIEW_MOVE_HOLD_SECONDS 0.2
+
 /* Frame time against traced pixels, t ~ P^0.75: bench_view measured 2.9x
  * and 3.0x the time for 4x the pixels (1M-point dragon, scale 1 against 2,
  * at 512x512 and 1024x768). With t ~ P the coarse frames, dearer per
