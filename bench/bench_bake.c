@@ -92,11 +92,11 @@
 #define BAKE_SEED 1
 #define REF_SEED 1
 #define CURVE_SEED 1000        /* curve point i uses CURVE_SEED + i (as bench_ref) */
-#define CACHE_VERSION 1u       /* of the centred reference: bump when the path tracer changes */
+#define CACHE_VERSION 2u       /* of the centred reference: bump when the path tracer changes */
 #define CENTRE_TAG 0x63656e747265ull /* "centre": keys differ from bench_ref's */
 /* bench_ref's cache key recipe, to find its jittered reference of the same
  * view (bench_ref.c: CACHE_VERSION, default --ref-spp). */
-#define BENCH_REF_CACHE_VERSION 1u
+#define BENCH_REF_CACHE_VERSION 2u
 #define BENCH_REF_SPP 4096
 #define MAX_LIST 16
 #define MAX_BAKES 256

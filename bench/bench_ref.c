@@ -71,7 +71,7 @@
 #define CURVE_SEED 1000        /* curve point i uses CURVE_SEED + i             */
 /* Bump when the path tracer changes what it computes: old cached
  * references then stop matching. */
-#define CACHE_VERSION 1u
+#define CACHE_VERSION 2u
 #define MAX_SIZES 8
 #define MAX_CURVE 32
 

@@ -1,28 +1,35 @@
 /* bake.h — baked incident light on the splats, and its lookup.
  *
- * What it does: one photon-style pass from the environment map through the
- * models' hierarchies (bake/photons.h) records where light lands after one
- * or more bounces; a gather (bake/irradiance.h) turns the records into
- * indirect irradiance at every splat. The direct irradiance comes from
- * shadow rays towards the envmap (bake/direct.h) at SAMPLE POINTS, a
- * subset of the splats chosen per model by a spacing from the material and
- * refined where the light changes fast (bake/samples.h), and is
- * interpolated to every splat, so E = direct + indirect per splat. (With
- * direct_samples < 0 the photons carry the direct light too.) Glossy
- * (GGX) models also get directional bins of the lobe-filtered incident
- * radiance S(wo) at their sample points (bake/glossy.h). Looking up a hit
- * interpolates E over the splats around it with the surface's own MLS
- * weights (sg_scene_hit_weights), so the baked light is as smooth as the
- * surface, and applies the material:
+ * What it does: stores the irradiance E arriving at each side of every
+ * splat (front: along its normal; back: against it), so a lookup reads the
+ * side the viewer sees and closed models, thin walls and rooms do not
+ * leak. E = direct + indirect per side:
+ *  - SAMPLE SITES (bake/samples.h, bake/transport.h): a subset of the
+ *    splats chosen per model by a spacing from the material, both sides of
+ *    each, refined where the light changes fast (shadow edges, contact
+ *    regions and folds). One set of rays per site estimates the direct
+ *    light as a visibility ratio (times the unshadowed irradiance at each
+ *    splat's own normal) and records which surfaces send it indirect light;
+ *  - INDIRECT light, by default (SG_BAKE_INDIRECT_TRANSPORT), from one
+ *    sparse linear solve over the sites' hits (every bounce, no density
+ *    estimate); with SG_BAKE_INDIRECT_PHOTONS from the first estimator, a
+ *    photon pass (bake/photons.h) gathered at every splat by a kNN density
+ *    estimate (bake/irradiance.h), kept for comparison;
+ *  - values at sites are interpolated to every splat.
+ * Glossy (GGX) models also get directional bins of the lobe-filtered
+ * incident radiance S(wo) at their sample points (bake/glossy.h). Looking
+ * up a hit interpolates E over the splats around it with the surface's own
+ * MLS weights (sg_scene_hit_weights), on the side the ray arrived from, so
+ * the baked light is as smooth as the surface, and applies the material:
  *     Lambert:  L_o = emission + rho(x) / pi * E
  *     GGX:      L_o = emission + (1 - k) rho(x) / pi * E + k S(wo),
  * S blended over the sample points the hit's splats map to, with the same
  * weights.
  *
- * States: CREATED by sg_bake_create (traced and gathered), by
- * sg_bake_create_from_photons (gathered from a photon map traced in
- * chunks, see photons.h) or LOADED from a file (bake/bake_io.h); all answer
- * lookups for the world they were made for.
+ * States: CREATED by sg_bake_create, by sg_bake_create_from_photons
+ * (gathered from a photon map traced in chunks, see photons.h) or LOADED
+ * from a file (bake/bake_io.h); all answer lookups for the world they were
+ * made for.
  *
  * Ownership: the bake keeps no pointer to the world; lookups take it as an
  * argument and must be given the same world (same scene file) the bake was
@@ -37,24 +44,43 @@
 #include "bake/irradiance.h"
 #include "bake/photons.h"
 #include "core/error.h"
+#include "envmap/envmap.h"
 #include "io/image.h"
 #include "render/camera.h"
 #include "render/world.h"
 
 typedef struct sg_bake sg_bake; /* opaque */
 
+/* How the indirect light is estimated. */
+typedef enum sg_bake_indirect {
+    SG_BAKE_INDIRECT_TRANSPORT = 0, /* rays from the sample sites and the
+                                       transport solve (transport.h)      */
+    SG_BAKE_INDIRECT_PHOTONS = 1    /* photon density estimate at every
+                                       splat (photons.h, irradiance.h)     */
+} sg_bake_indirect;
+
 typedef struct sg_bake_desc {
-    sg_photon_desc photons;      /* count, seed, depth (photons.h defaults) */
-    sg_irradiance_desc gather;   /* k, normal_cos (irradiance.h defaults)    */
-    int direct_samples;          /* direct light by shadow rays at the sample
-                                    points (bake/direct.h), samples per point
-                                    per strategy; default 32; < 0: none, the
-                                    photons carry the direct light as well   */
+    sg_bake_indirect indirect;   /* default SG_BAKE_INDIRECT_TRANSPORT      */
+    sg_photon_desc photons;      /* count, seed, depth (photons.h defaults);
+                                    the seed keys every random stream, the
+                                    rest is used by the photon estimator */
+    sg_irradiance_desc gather;   /* k (photons), normal_cos (the same-facing
+                                    test of sample points too), threads   */
+    int direct_samples;          /* envmap importance samples per sample
+                                    site (transport.h); default 32; < 0:
+                                    none, the photons carry the direct
+                                    light as well (photon estimator only) */
+    int gather_rays;             /* cosine-distributed rays per sample site;
+                                    default 64 (transport), 32 (photons:
+                                    they serve the direct light only)     */
     float sample_spacing;        /* spacing of the sample points, a multiple
                                     of each model's median splat radius;
                                     0: from the material (samples.h: 4
                                     diffuse, 2 + 2 roughness glossy);
                                     < 0: every splat is a sample point      */
+    int refine_levels;           /* refinements of the sample points where
+                                    the light changes fast; default 2;
+                                    < 0: none                              */
     int glossy_res;              /* glossy bins per side, 4..32; 0: from
                                     the roughness (glossy.h, 4..32)          */
     int glossy_rays;             /* rays per glossy sample point; default
@@ -73,28 +99,33 @@ typedef struct sg_bake_stats {
     sg_ray_stats rays;         /* of the photon pass                         */
     double trace_seconds, gather_seconds;  /* 0 for a loaded bake; gather
                                               includes the direct light    */
-    double direct_seconds;     /* sample selection, the shadow rays of the
-                                  direct light and its interpolation (part
-                                  of gather_seconds); 0 for a loaded bake    */
+    double direct_seconds;     /* the sample sites: their selection and
+                                  rays, the transport solve and the
+                                  interpolation (part of gather_seconds);
+                                  0 for a loaded bake                      */
+    size_t site_hits;          /* rays of the sites that hit a surface      */
+    int transport_iterations;  /* sweeps of the transport solve (0: none)   */
     double glossy_seconds;     /* the glossy bins (part of gather_seconds)   */
     size_t memory_bytes;       /* all kept: the sum of the three below       */
-    size_t irradiance_bytes;   /* E: 3 floats per splat                      */
+    size_t irradiance_bytes;   /* the light per splat: SG_BAKE_SPLAT_FLOATS
+                                  floats                                   */
     size_t sample_bytes;       /* kept per glossy model: the splat of each
                                   sample point and each splat's sample (u32)  */
     size_t glossy_bytes;       /* the bins: 3 R^2 halves per glossy point    */
     size_t photon_memory_bytes;/* the photon records while baking (freed)    */
 } sg_bake_stats;
 
-/* Traces the photons of d->photons (progress and cancel as in photons.h:
- * SG_ERR_CANCELLED, nothing kept) and gathers them. */
+/* Bakes: the photon pass first with SG_BAKE_INDIRECT_PHOTONS (progress
+ * and cancel as in photons.h: SG_ERR_CANCELLED, nothing kept), then the
+ * sample sites and the indirect light. */
 sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *d, sg_bake **out, sg_error *err);
 
-/* Gathers a photon map that holds the whole pass of d->photons (pm->blocks
- * = sg_photon_block_count(&d->photons), else SG_ERR_INVALID_ARG) into a
- * bake, and adds the direct light (d->direct_samples). The map must have
- * been traced with sg_bake_desc_resolve(d).photons: its flags say whether
- * photons record direct light. pm stays the caller's. Equal maps give
- * equal bakes. */
+/* SG_BAKE_INDIRECT_PHOTONS only: gathers a photon map that holds the whole
+ * pass of d->photons (pm->blocks = sg_photon_block_count(&d->photons), else
+ * SG_ERR_INVALID_ARG) into a bake, and adds the direct light
+ * (d->direct_samples). The map must have been traced with
+ * sg_bake_desc_resolve(d).photons: its flags say whether photons record
+ * direct light. pm stays the caller's. Equal maps give equal bakes. */
 sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *d, const sg_photon_map *pm,
                                       sg_bake **out, sg_error *err);
 
@@ -112,7 +143,8 @@ sg_bake_desc sg_bake_get_desc(const sg_bake *b);
 /* 64-bit FNV-1a of the parameters that change a bake's values: photon
  * count, seed, max depth, Russian roulette depth, k, normal_cos,
  * SG_PHOTON_BLOCK, direct samples, sample spacing (float bits), glossy
- * resolution and rays, and SG_BAKE_ALGORITHM, after defaults (so spelling
+ * resolution and rays, the indirect estimator, gather rays, refinement
+ * levels and SG_BAKE_ALGORITHM, after defaults (so spelling
  * a default out changes nothing), as little-endian u64 (normal_cos: its
  * float bits). Threads and progress do not count: results ignore them.
  * Never 0. */
@@ -123,15 +155,29 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * an older splatgi counts as made with other parameters (and
  * splatgi-bake --if-stale bakes again). 2: sparse direct light as a
  * visibility ratio times the tabulated unshadowed irradiance; 3: bright
- * texels of the table must also stand out from the mean. */
-#define SG_BAKE_ALGORITHM 3u
+ * texels of the table must also stand out from the mean; 4: light per
+ * side, sample sites with stratified rays, indirect light by the transport
+ * solve. */
+#define SG_BAKE_ALGORITHM 4u
 
 size_t sg_bake_model_count(const sg_bake *b);
 
-/* Model m's irradiance: 3 floats (RGB, W/m^2) per splat, in the order of
- * sg_scene_points(sg_world_scene(w, m)); *splats gets the splat count.
- * Owned by the bake. m < sg_bake_model_count(b). */
-const float *sg_bake_irradiance_data(const sg_bake *b, uint32_t m, size_t *splats);
+/* Floats of baked light per splat: per side (front, along the splat's
+ * normal, then back), the visibility ratio of the direct light (RGB) and
+ * the indirect irradiance (RGB, W/m^2). The irradiance of a side with
+ * normal n is E = E0(n) * ratio + indirect, E0 the envmap's unshadowed
+ * irradiance at n (envmap/irradiance_table.h), evaluated at the normal of
+ * the point looked up. */
+#define SG_BAKE_SPLAT_FLOATS 12
+
+/* Model m's light: SG_BAKE_SPLAT_FLOATS floats per splat (above), in the
+ * order of sg_scene_points(sg_world_scene(w, m)); *splats gets the splat
+ * count. Owned by the bake. m < sg_bake_model_count(b). */
+const float *sg_bake_light_data(const sg_bake *b, uint32_t m, size_t *splats);
+
+/* The irradiance (RGB, W/m^2) of one side (0 front, 1 back) of splat
+ * `splat` of model m, at its own normal. */
+sg_vec3 sg_bake_splat_irradiance(const sg_bake *b, const sg_world *w, uint32_t m, size_t splat, int side);
 
 /* Sample points of model m (every splat when sample_spacing < 0). */
 size_t sg_bake_sample_count(const sg_bake *b, uint32_t m);
@@ -143,8 +189,9 @@ size_t sg_bake_sample_count(const sg_bake *b, uint32_t m);
 void sg_bake_glossy_data(const sg_bake *b, uint32_t m, int *res, size_t *count, const uint32_t **splat,
                          const uint32_t **nearest, const uint16_t **bins);
 
-/* Interpolated irradiance at a hit (RGB, W/m^2). */
-sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h);
+/* Interpolated irradiance at a hit (RGB, W/m^2) on the side that faces wo
+ * (unit, pointing away from the surface: towards the viewer). */
+sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo);
 
 /* Outgoing radiance at a hit towards the viewer at direction wo (unit,
  * pointing away from the surface). */
@@ -161,12 +208,13 @@ typedef struct sg_bake_frame_desc {
 sg_status sg_bake_render(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *d, sg_image *out,
                          double *seconds, sg_error *err);
 
-/* For bake_io.c only: an empty bake (irradiance zeroed) with models and
- * counts[m] splats per model, desc d (resolved) and stats s; and write
- * access to model m's irradiance. */
-sg_status sg_bake__new(size_t models, const size_t *counts, const sg_bake_desc *d, const sg_bake_stats *s,
-                       sg_bake **out, sg_error *err);
-float *sg_bake__irradiance(sg_bake *b, uint32_t m);
+/* For bake_io.c only: an empty bake (light zeroed) for a world with
+ * envmap env (its irradiance table is built here), models and counts[m]
+ * splats per model, desc d (resolved) and stats s; and write access to
+ * model m's light (SG_BAKE_SPLAT_FLOATS per splat). */
+sg_status sg_bake__new(const sg_envmap *env, size_t models, const size_t *counts, const sg_bake_desc *d,
+                       const sg_bake_stats *s, sg_bake **out, sg_error *err);
+float *sg_bake__light(sg_bake *b, uint32_t m);
 /* For bake_io.c only: model m's sample count, and room for its glossy
  * bins (res per side, count samples); the arrays to fill through
  * sg_bake__glossy. Call before the bake is used; stats follow. */

@@ -23,15 +23,17 @@
 
 #include "bake/bake_file.h"
 #include "bake/glossy.h"
+#include "bake/samples.h"
 #include "core/alloc.h"
 
 enum {
     META_VERSION = 0, META_COUNT, META_SEED, META_MAX_DEPTH, META_RR_DEPTH, META_K, META_NORMAL_COS,
     META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */,
     META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */,
-    META_SPACING, META_GLOSSY_RES, META_GLOSSY_RAYS, META_SAMPLES
+    META_SPACING, META_GLOSSY_RES, META_GLOSSY_RAYS, META_SAMPLES,
+    META_INDIRECT /* sg_bake_indirect */, META_GATHER_RAYS, META_REFINE /* int64; -1 none */
 };
-#define META_LAYOUT 3u
+#define META_LAYOUT 4u
 
 /* CNTS is read straight into the size_t counts sg_bake__new takes. */
 _Static_assert(sizeof(size_t) == sizeof(uint64_t), "bake_io.c assumes a 64-bit size_t");
@@ -67,6 +69,9 @@ static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, s
     meta[META_GLOSSY_RES] = (uint64_t)d->glossy_res;
     meta[META_GLOSSY_RAYS] = (uint64_t)d->glossy_rays;
     meta[META_SAMPLES] = samples;
+    meta[META_INDIRECT] = (uint64_t)d->indirect;
+    meta[META_GATHER_RAYS] = (uint64_t)d->gather_rays;
+    meta[META_REFINE] = (uint64_t)(int64_t)d->refine_levels;
 }
 
 static void describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
@@ -94,7 +99,7 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
         return sg_error_set(err, SG_ERR_UNSUPPORTED,
                             "%s: section META: layout %" PRIu64 ", this build reads %u (%s; bake again)", path,
                             meta[META_VERSION], META_LAYOUT,
-                            meta[META_VERSION] < META_LAYOUT ? "made before sample points and glossy bins"
+                            meta[META_VERSION] < META_LAYOUT ? "made before light per side and the transport solve"
                                                              : "made by a newer build");
     uint32_t cos_bits = (uint32_t)meta[META_NORMAL_COS], sp_bits = (uint32_t)meta[META_SPACING];
     float normal_cos, spacing;
@@ -120,6 +125,13 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
         bad = "glossy resolution";
     else if (meta[META_GLOSSY_RAYS] < 1 || meta[META_GLOSSY_RAYS] > INT32_MAX)
         bad = "glossy rays";
+    else if (meta[META_INDIRECT] > SG_BAKE_INDIRECT_PHOTONS)
+        bad = "indirect estimator";
+    else if (meta[META_GATHER_RAYS] < 1 || meta[META_GATHER_RAYS] > INT32_MAX)
+        bad = "gather rays";
+    else if ((int64_t)meta[META_REFINE] < -1 || (int64_t)meta[META_REFINE] == 0 ||
+             (int64_t)meta[META_REFINE] >= SG_SAMPLES_MAX_LEVEL)
+        bad = "refinement levels";
     if (bad)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %s is out of range", path, bad);
     *d = (sg_bake_desc){.photons = {.count = (size_t)meta[META_COUNT],
@@ -130,7 +142,10 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
                         .direct_samples = (int)(int64_t)meta[META_DIRECT],
                         .sample_spacing = spacing,
                         .glossy_res = (int)meta[META_GLOSSY_RES],
-                        .glossy_rays = (int)meta[META_GLOSSY_RAYS]};
+                        .glossy_rays = (int)meta[META_GLOSSY_RAYS],
+                        .indirect = (sg_bake_indirect)meta[META_INDIRECT],
+                        .gather_rays = (int)meta[META_GATHER_RAYS],
+                        .refine_levels = (int)(int64_t)meta[META_REFINE]};
     uint64_t h = 0;
     if (meta[META_BLOCK] == SG_PHOTON_BLOCK)
         h = sg_bake_param_hash(d);
@@ -176,7 +191,7 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
     size_t sections = models + 4;
     for (size_t m = 0; m < models; ++m) {
         size_t n;
-        sg_bake_irradiance_data(b, (uint32_t)m, &n);
+        sg_bake_light_data(b, (uint32_t)m, &n);
         counts[m] = n;
         samples[m] = sg_bake_sample_count(b, (uint32_t)m);
         int res;
@@ -207,8 +222,8 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
     for (size_t m = 0; m < models && st == SG_OK; ++m) {
         char tag[8];
         snprintf(tag, sizeof tag, "E%03X", (unsigned)m);
-        st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_F32, 3 * counts[m],
-                                        sg_bake_irradiance_data(b, (uint32_t)m, NULL), err);
+        st = sg_bake_writer_add_section(w, tag, SG_BAKE_TYPE_F32, SG_BAKE_SPLAT_FLOATS * counts[m],
+                                        sg_bake_light_data(b, (uint32_t)m, NULL), err);
         if (st != SG_OK || !gres[m])
             continue;
         int res;
@@ -351,25 +366,27 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
                            .rays = {meta[META_RAYS], meta[META_RAYS + 1], meta[META_RAYS + 2],
                                     meta[META_RAYS + 3], meta[META_RAYS + 4], meta[META_RAYS + 5]}};
     size_t *sizes = (size_t *)counts; /* u64 as size_t: same width (asserted above) */
-    if ((st = sg_bake__new(models, sizes, &d, &stats, &b, err)) != SG_OK)
+    if ((st = sg_bake__new(sg_world_envmap(w), models, sizes, &d, &stats, &b, err)) != SG_OK)
         goto done;
     for (size_t m = 0; m < models; ++m) {
         char tag[8];
         snprintf(tag, sizeof tag, "E%03X", (unsigned)m);
         const sg_bake_section *s = sg_bake_file_find(f, tag);
-        if (!s || s->type != SG_BAKE_TYPE_F32 || s->count != 3 * counts[m]) {
+        if (!s || s->type != SG_BAKE_TYPE_F32 || s->count != SG_BAKE_SPLAT_FLOATS * counts[m]) {
             st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s is %s (expected %" PRIu64 " floats)", path, tag,
-                              s ? "of the wrong type or length" : "missing", 3 * counts[m]);
+                              s ? "of the wrong type or length" : "missing", SG_BAKE_SPLAT_FLOATS * counts[m]);
             goto done;
         }
-        float *E = sg_bake__irradiance(b, (uint32_t)m);
+        float *E = sg_bake__light(b, (uint32_t)m);
         if ((st = sg_bake_file_read(f, tag, E, s->size, err)) != SG_OK)
             goto done;
-        for (size_t i = 0; i < 3 * counts[m]; ++i) {
+        for (size_t i = 0; i < SG_BAKE_SPLAT_FLOATS * counts[m]; ++i) {
             const char *what = not_finite_or_negative(E[i]);
             if (what) {
-                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: model %zu, splat %zu: irradiance is %s (%g)", path, m,
-                                  i / 3, what, (double)E[i]);
+                size_t k = i % SG_BAKE_SPLAT_FLOATS;
+                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: model %zu, splat %zu: %s %s is %s (%g)", path, m,
+                                  i / SG_BAKE_SPLAT_FLOATS, k < 6 ? "front" : "back",
+                                  k % 6 < 3 ? "visibility ratio" : "indirect irradiance", what, (double)E[i]);
                 goto done;
             }
         }

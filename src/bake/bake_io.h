@@ -17,11 +17,13 @@
  * for another scene fails in sg_bake_file_open with both hashes named.
  *
  * Sections of a bake (flags 0):
- *   META  U64 x 24  the parameters and figures, layout below
+ *   META  U64 x 28  the parameters and figures, layout below
  *   CNTS  U64 x M   splats per model, M = number of models
  *   SCNT  U64 x M   sample points per model (bake/samples.h)
  *   GRES  U64 x M   glossy bins per side per model, 0: no bins
- *   Emmm  F32 x 3n  model mmm's irradiance, RGB per splat, W/m^2, in the
+ *   Emmm  F32 x 12n model mmm's light, SG_BAKE_SPLAT_FLOATS per splat (per
+ *                   side: visibility ratio RGB, indirect irradiance RGB,
+ *                   W/m^2; bake.h), in the
  *                   order of sg_scene_points(sg_world_scene(w, m)); mmm is
  *                   the model index in 3 upper-case hex digits: "E000",
  *                   "E001", ... "E00A"; at most SG_BAKE_IO_MAX_MODELS models
@@ -32,7 +34,7 @@
  *                   (i, j) at 3 (j R + i), RGB (bake/glossy.h), finite >= 0
  *   (a file holds at most SG_BAKE_MAX_SECTIONS sections in all)
  * Sections of a checkpoint (flags SG_BAKE_FLAG_CHECKPOINT):
- *   META  U64 x 24  as for a bake; [8] says which blocks are done: the
+ *   META  U64 x 28  as for a bake; [8] says which blocks are done: the
  *                   records are those of blocks [0, META[8]) exactly
  *   PHPX PHPY PHPZ  F32 x R each: record positions (world space)
  *   PHNX PHNY PHNZ  F32 x R: normals
@@ -40,7 +42,7 @@
  *   PHFR PHFG PHFB  F32 x R: flux, RGB
  *   PHMD            U32 x R: model index
  * META, element i (u64; floats as their bits in the low 32 bits):
- *    0 layout version, 2         8 photon blocks done
+ *    0 layout version, 4         8 photon blocks done
  *    1 photon count              9 photons shot (those of the done blocks)
  *    2 seed                     10 photon records R
  *    3 max depth                11 models (0 in a checkpoint)
@@ -56,12 +58,16 @@
  *                               22 glossy rays per sample point
  *                               23 sample points, all models (0 in a
  *                                  checkpoint)
- * Element 0 is the META layout: 3. Layout 2 (before sample points and
- * glossy bins: elements 20..23 were 0) is refused with SG_ERR_UNSUPPORTED
- * and a message to bake again: its values were made at every splat with
- * another parameter set, so reading it as layout 3 would mislabel it.
- * Elements 1..7 and 19..22 hash to the header's parameter hash (checked on
- * load).
+ *                               24 indirect estimator (sg_bake_indirect)
+ *                               25 gather rays per sample site
+ *                               26 refinement levels (int64; -1 none)
+ *                               27 reserved, 0
+ * Element 0 is the META layout: 4. Older layouts (2: before sample points
+ * and glossy bins; 3: one irradiance per splat, before light per side and
+ * the transport solve) are refused with SG_ERR_UNSUPPORTED and a message to
+ * bake again: their values mean something else.
+ * Elements 1..7, 19..22 and 24..26 hash to the header's parameter hash
+ * (checked on load).
  *
  * Errors (messages begin with the path):
  *  SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED  from bake_file.h, and
@@ -93,7 +99,7 @@
 #include "render/world.h"
 
 #define SG_BAKE_IO_MAX_MODELS 4094u /* "E000".."EFFD": 4096 sections minus META and CNTS */
-#define SG_BAKE_META_COUNT 24u      /* u64 elements of META                          */
+#define SG_BAKE_META_COUNT 28u      /* u64 elements of META                          */
 
 /* Writes b to path atomically. */
 sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, sg_error *err);

@@ -201,7 +201,7 @@ sg_status sg_glossy_bake(const sg_world *w, const sg_bake *b, uint32_t m, const 
                     const sg_material *hm = sg_world_material(w, hh.model);
                     /* the diffuse share of the surface hit: (1 - k) rho / pi E */
                     float kd = sg_glossy_material(hm) ? 1.0f - (hm->specular < 1.0f ? hm->specular : 1.0f) : 1.0f;
-                    sg_vec3 E = sg_bake_irradiance(b, w, &hh);
+                    sg_vec3 E = sg_bake_irradiance(b, w, &hh, sg_v3_scale(wi, -1.0f));
                     L = sg_v3_add(hm->emission, sg_v3_scale(sg_v3_mul(sg_world_albedo(w, &hh), E), kd * INV_PI_F));
                 } else {
                     L = sg_envmap_eval(env, wi);

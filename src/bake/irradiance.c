@@ -33,7 +33,7 @@ sg_status sg_irradiance_gather(const sg_world *w, const sg_photon_map *pm, const
     sg_status st = SG_OK;
     for (size_t m = 0; m < models; ++m) {
         size_t n = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
-        if (!(E[m] = sg_calloc_array(3 * n, sizeof(float)))) {
+        if (!(E[m] = sg_calloc_array(6 * n, sizeof(float)))) {
             st = sg_error_set(err, SG_ERR_NOMEM, "irradiance: out of memory for %zu splats", n);
             goto fail;
         }
@@ -59,22 +59,23 @@ sg_status sg_irradiance_gather(const sg_world *w, const sg_photon_map *pm, const
             float h2 = d2[found - 1];
             if (!(h2 > 0.0f))
                 continue;
-            double e[3] = {0, 0, 0};
+            double e[6] = {0, 0, 0, 0, 0, 0}; /* front RGB, back RGB */
             float norm = 2.0f / (PI_F * h2);
             for (size_t j = 0; j < found; ++j) {
                 uint32_t p = idx[j];
+                /* A record's normal faces the side it arrived from: along
+                 * n for the front, against it for the back. */
                 float cn = pm->nx[p] * n.x + pm->ny[p] * n.y + pm->nz[p] * n.z;
-                float cw = pm->wx[p] * n.x + pm->wy[p] * n.y + pm->wz[p] * n.z;
-                if (cn < d.normal_cos || cw <= 0.0f)
+                int side = cn < 0.0f;
+                if ((side ? -cn : cn) < d.normal_cos)
                     continue;
                 float k = norm * (1.0f - d2[j] / h2);
-                e[0] += (double)pm->fr[p] * k;
-                e[1] += (double)pm->fg[p] * k;
-                e[2] += (double)pm->fb[p] * k;
+                e[3 * side + 0] += (double)pm->fr[p] * k;
+                e[3 * side + 1] += (double)pm->fg[p] * k;
+                e[3 * side + 2] += (double)pm->fb[p] * k;
             }
-            Em[3 * i + 0] = (float)e[0];
-            Em[3 * i + 1] = (float)e[1];
-            Em[3 * i + 2] = (float)e[2];
+            for (int c = 0; c < 6; ++c)
+                Em[6 * i + (size_t)c] = (float)e[c];
         }
     }
     sg_knn_destroy(tree);

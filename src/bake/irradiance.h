@@ -3,8 +3,9 @@
  *
  * At a splat centre x with normal n, the k nearest photon records (sg_knn,
  * exact, ordered) give a disk of radius h = distance to the k-th; the
- * irradiance is the flux of the records that arrived on the splat's side
- * and on a surface facing the same way, weighted by the 2D Epanechnikov
+ * irradiance of each side of the splat (front: along n, back: against it)
+ * is the flux of the records that arrived on that side of a surface facing
+ * the same way (normals within normal_cos), weighted by the 2D Epanechnikov
  * kernel K(d) = 2 / (pi h^2) (1 - d^2 / h^2), which integrates to 1 over
  * the disk:  E(x) = sum_j Phi_j K(d_j)  [W / m^2].
  * Outgoing diffuse radiance is then rho / pi * E (the 1/pi that bakers are
@@ -24,8 +25,8 @@ typedef struct sg_irradiance_desc {
     int threads;       /* 0 = OpenMP default                               */
 } sg_irradiance_desc;
 
-/* For every model m, out[m] gets 3 * splat_count floats: the RGB irradiance
- * at each splat of sg_world_scene(w, m) (sg_alloc_array; the caller frees
+/* For every model m, out[m] gets 6 * splat_count floats: the RGB irradiance
+ * of each splat of sg_world_scene(w, m), front side then back side (sg_alloc_array; the caller frees
  * each with sg_free and the array of pointers too). Deterministic. */
 sg_status sg_irradiance_gather(const sg_world *w, const sg_photon_map *pm, const sg_irradiance_desc *d, float ***out,
                                sg_error *err);

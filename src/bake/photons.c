@@ -98,8 +98,11 @@ static void trace_photon(const sg_world *w, const sg_photon_desc *d, uint64_t i,
                             sg_rng_float(d->seed, i, bn, 2), &wo, &pdf_b, &weight))
             return;
         flux = sg_v3_mul(flux, weight);
-        if (depth + 1 >= d->rr_depth) {
-            float q = fminf(0.95f, max3(weight));
+        /* Russian roulette on the bounce's weight (<= 1), survival q =
+         * its largest channel: a survivor's flux never grows (as in the
+         * reference, pathtrace.c). */
+        float q = max3(weight);
+        if (depth + 1 >= d->rr_depth && q < 1.0f) {
             if (!(q > 0.0f) || sg_rng_float(d->seed, i, bn, 3) >= q)
                 return;
             flux = sg_v3_scale(flux, 1.0f / q);

@@ -213,11 +213,10 @@ sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos
 
 static float level_spacing(float s0, uint8_t level) { return ldexpf(s0, -(int)level); }
 
-sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
-                            const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
-                            sg_error *err)
+sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                                const float *sigma, float threshold, uint8_t level, const sg_sample_set *set,
+                                uint8_t *mark, sg_error *err)
 {
-    *added = 0;
     if (level >= SG_SAMPLES_MAX_LEVEL || set->count == 0)
         return SG_OK;
     double mean = 0.0;
@@ -227,18 +226,13 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
     if (!(mean > 0.0))
         return SG_OK;
     float floor_y = (float)(0.05 * mean), sl = level_spacing(s0, level), r2 = 4.0f * sl * sl;
-    grid g = {0}, gm = {0};
-    uint32_t *marked = NULL, *cands = NULL;
-    size_t nmarked = 0, ncand = 0;
-    sg_status st = SG_OK;
-    if (!grid_init(&g, 2.0f * sl, set->count) || !(marked = sg_alloc_array(set->count, sizeof *marked))) {
-        st = sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
-        goto done;
-    }
+    grid g = {0};
+    if (!grid_init(&g, 2.0f * sl, set->count))
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
     for (size_t j = 0; j < set->count; ++j)
         grid_insert(&g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
     for (size_t j = 0; j < set->count; ++j) {
-        if (set->level[j] != level)
+        if (set->level[j] != level || mark[j])
             continue;
         sg_vec3 p = sg_pointset_position(ps, set->splat[j]), n = sg_pointset_normal(ps, set->splat[j]);
         float yj = fmaxf(luminance(values + 3 * j), floor_y);
@@ -255,9 +249,30 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
                 differs = dy > threshold * fmaxf(yi, yj) &&
                           (!sigma || dy > 3.0f * sqrtf(sigma[i] * sigma[i] + sigma[j] * sigma[j]));
             }
-        if (differs)
-            marked[nmarked++] = (uint32_t)j;
+        mark[j] = (uint8_t)differs;
     }
+    grid_free(&g);
+    return SG_OK;
+}
+
+sg_status sg_samples_refine_marked(const sg_pointset *ps, float s0, float normal_cos, const uint8_t *mark,
+                                   uint8_t level, sg_sample_set *set, size_t *added, sg_error *err)
+{
+    *added = 0;
+    if (level >= SG_SAMPLES_MAX_LEVEL || set->count == 0)
+        return SG_OK;
+    float sl = level_spacing(s0, level);
+    grid gm = {0};
+    uint32_t *marked = NULL, *cands = NULL;
+    size_t nmarked = 0, ncand = 0;
+    sg_status st = SG_OK;
+    if (!(marked = sg_alloc_array(set->count, sizeof *marked))) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
+        goto done;
+    }
+    for (size_t j = 0; j < set->count; ++j)
+        if (mark[j] && set->level[j] == level)
+            marked[nmarked++] = (uint32_t)j;
     if (nmarked == 0)
         goto done;
     if (!grid_init(&gm, sl, nmarked) || !(cands = sg_alloc_array(ps->count, sizeof *cands))) {
@@ -286,10 +301,24 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
     if (st == SG_OK)
         *added = set->count - before;
 done:
-    grid_free(&g);
     grid_free(&gm);
     sg_free(marked);
     sg_free(cands);
+    return st;
+}
+
+sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                            const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
+                            sg_error *err)
+{
+    *added = 0;
+    uint8_t *mark = sg_calloc_array(set->count ? set->count : 1, sizeof *mark);
+    if (!mark)
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
+    sg_status st = sg_samples_mark_jumps(ps, s0, normal_cos, values, sigma, threshold, level, set, mark, err);
+    if (st == SG_OK)
+        st = sg_samples_refine_marked(ps, s0, normal_cos, mark, level, set, added, err);
+    sg_free(mark);
     return st;
 }
 
@@ -355,8 +384,19 @@ static uint32_t nearest_anywhere(const sg_pointset *ps, const sg_sample_set *set
 sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err)
 {
+    return sg_samples_interpolate_n(ps, set, s0, support, normal_cos, values, 3, threads, out, err);
+}
+
+sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+                                   float normal_cos, const float *values, int channels, int threads, float *out,
+                                   sg_error *err)
+{
+    if (channels < 1 || channels > SG_SAMPLES_MAX_CHANNELS)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "samples: %d channels (1..%d)", channels,
+                            SG_SAMPLES_MAX_CHANNELS);
+    const size_t nc = (size_t)channels;
     if (set->count == 0) {
-        memset(out, 0, 3 * ps->count * sizeof *out);
+        memset(out, 0, nc * ps->count * sizeof *out);
         return SG_OK;
     }
     grid g;
@@ -377,8 +417,12 @@ sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set
          * towards its neighbourhood's average (1.5% of the energy on a
          * unit sphere at the default spacing, measured). */
         double m[6] = {0, 0, 0, 0, 0, 0}; /* sums of w, wu, wv, wuu, wuv, wvv */
-        double rhs[3][3] = {{0}};         /* per channel: sums of wf, wfu, wfv */
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        double rhs[SG_SAMPLES_MAX_CHANNELS][3] = {{0}}; /* per channel: sums of wf, wfu, wfv */
+        float lo[SG_SAMPLES_MAX_CHANNELS], hi[SG_SAMPLES_MAX_CHANNELS];
+        for (size_t c = 0; c < nc; ++c) {
+            lo[c] = INFINITY;
+            hi[c] = -INFINITY;
+        }
         float inv_r0 = 1.0f / (support * s0);
         for (int k = 0; k < 27; ++k)
             for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
@@ -398,8 +442,8 @@ sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set
                 m[3] += w * u * u;
                 m[4] += w * u * v;
                 m[5] += w * v * v;
-                for (int c = 0; c < 3; ++c) {
-                    float f = values[3 * (size_t)j + (size_t)c];
+                for (size_t c = 0; c < nc; ++c) {
+                    float f = values[nc * (size_t)j + c];
                     rhs[c][0] += w * f;
                     rhs[c][1] += w * f * u;
                     rhs[c][2] += w * f * v;
@@ -413,7 +457,7 @@ sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set
             double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
             double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
             int fit = det > 1e-4 * a * a * a;
-            for (int c = 0; c < 3; ++c) {
+            for (size_t c = 0; c < nc; ++c) {
                 double v0 = rhs[c][0] / a;
                 if (fit) {
                     double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
@@ -422,13 +466,13 @@ sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set
                 /* no new extrema: a fit across a shadow edge cannot
                  * overshoot the values it was made from */
                 float vf = (float)v0;
-                out[3 * i + (size_t)c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
+                out[nc * i + c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
             }
         } else {
             uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
             if (j == NONE)
                 j = nearest_anywhere(ps, set, i);
-            memcpy(out + 3 * i, values + 3 * (size_t)j, 3 * sizeof *out);
+            memcpy(out + nc * i, values + nc * (size_t)j, nc * sizeof *out);
         }
     }
     grid_free(&g);

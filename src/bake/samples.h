@@ -44,6 +44,7 @@
 #include "points/pointset.h"
 
 #define SG_SAMPLES_MAX_LEVEL 8
+#define SG_SAMPLES_MAX_CHANNELS 12 /* values per sample of sg_samples_interpolate_n */
 
 typedef struct sg_sample_set {
     size_t count;     /* sample points                                     */
@@ -84,12 +85,31 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
                             const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
                             sg_error *err);
 
+/* The two halves of sg_samples_refine, for callers that mark samples by
+ * several criteria: mark_jumps sets mark[j] = 1 for the samples of level
+ * `level` that differ from a neighbour as sg_samples_refine describes
+ * (marks already set stay set; mark has set->count entries); refine_marked
+ * thins the splats within one spacing of the marked samples of level
+ * `level` at half that spacing into set. */
+sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+                                const float *sigma, float threshold, uint8_t level, const sg_sample_set *set,
+                                uint8_t *mark, sg_error *err);
+sg_status sg_samples_refine_marked(const sg_pointset *ps, float s0, float normal_cos, const uint8_t *mark,
+                                   uint8_t level, sg_sample_set *set, size_t *added, sg_error *err);
+
 /* out: 3 floats per splat, interpolated from values (3 floats per sample)
  * as described above (a constant is reproduced exactly, a linear
  * function of the tangent-plane position too where the samples span it); support: kernel radius as a multiple of a sample's
  * spacing (e.g. 2). Deterministic. */
 sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err);
+
+/* The same for `channels` values per sample (1..SG_SAMPLES_MAX_CHANNELS),
+ * each interpolated on its own with the same weights: out gets channels
+ * floats per splat. */
+sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+                                   float normal_cos, const float *values, int channels, int threads, float *out,
+                                   sg_error *err);
 
 /* out: per splat, the index into set of its nearest same-facing sample
  * (nearest of any facing when none faces its way within 2 s0). */

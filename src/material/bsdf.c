@@ -64,6 +64,22 @@ sg_vec3 sg_material_albedo(const sg_material *m, sg_vec3 point_albedo)
     return m->use_point_colors ? sg_v3_mul(m->albedo, point_albedo) : m->albedo;
 }
 
+float sg_bsdf_ggx_average_albedo(float roughness)
+{
+    /* Entry i: roughness i / 32 (see bsdf.h for how it was integrated). */
+    static const float table[33] = {
+        1.00000f, 1.00000f, 0.99996f, 0.99955f, 0.99903f, 0.99780f, 0.99542f, 0.99230f, 0.98735f,
+        0.98089f, 0.97257f, 0.96265f, 0.95061f, 0.93669f, 0.92062f, 0.90229f, 0.88148f, 0.85864f,
+        0.83400f, 0.80751f, 0.77921f, 0.74968f, 0.71889f, 0.68725f, 0.65505f, 0.62250f, 0.58993f,
+        0.55761f, 0.52579f, 0.49472f, 0.46453f, 0.43539f, 0.40743f};
+    float x = (roughness > 0.0f ? (roughness < 1.0f ? roughness : 1.0f) : 0.0f) * 32.0f;
+    int i = (int)x;
+    if (i >= 32)
+        return table[32];
+    float t = x - (float)i;
+    return table[i] + (table[i + 1] - table[i]) * t;
+}
+
 /* Share of the glossy lobe, which is also its sampling probability: the
  * weight then stays a mean of rho and G2/G1, both <= 1 (bsdf.h). */
 static float glossy_share(const sg_material *m)

@@ -109,6 +109,16 @@ sg_vec3 sg_bsdf_eval(const sg_material *m, sg_vec3 albedo, sg_vec3 n, sg_vec3 wo
  * surface, where sampling fails. */
 float sg_bsdf_pdf(const sg_material *m, sg_vec3 n, sg_vec3 wo, sg_vec3 wi);
 
+/* The hemispherical albedo of the glossy lobe alone (white, k = 1):
+ * (1/pi) int E(wo) cos(wo) dwo, E the directional albedo above, for the
+ * material's roughness: 1 for a sharp lobe, 0.41 at roughness 1 (the
+ * single-scattering lobe loses the rest). Tabulated at roughness steps of
+ * 1/32 (64 x 64 cosine-distributed wo, 4096 lobe samples each) and
+ * interpolated linearly; tests/material/test_bsdf.c checks the table
+ * against the integral. Used where a glossy surface's light is treated
+ * as diffuse (the bake's transport). */
+float sg_bsdf_ggx_average_albedo(float roughness);
+
 /* Draws wi from (1 - p) cosine-hemisphere + p visible-normal GGX
  * (Heitz 2018), p = k for SG_MATERIAL_GGX and 0 for Lambert; u0 picks the
  * lobe, (u1, u2) the direction; u* in [0,1). On success returns 1 and writes

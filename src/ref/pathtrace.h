@@ -7,11 +7,14 @@
  * adds the emission, samples the envmap (importance-sampled, shadow ray)
  * and the BSDF, and weights the two strategies by the power heuristic
  * (Veach 1997); a BSDF-sampled ray that escapes adds the envmap with the
- * matching weight. Russian roulette from rr_depth on, with survival
- * probability min(0.95, max throughput channel) and the throughput divided
- * by it: no clamping anywhere, so the estimate is unbiased except for the
- * max_depth cut (set it high to make that bias negligible: the furnace
- * tests use 1024).
+ * matching weight. Russian roulette from rr_depth on, on paths whose
+ * throughput has fallen below 1, with survival probability equal to the
+ * largest throughput channel and the throughput divided by it, so no path
+ * ever carries more than it started with: no clamping anywhere, so the
+ * estimate is unbiased except for the max_depth cut (set it high to make
+ * that bias negligible: the furnace tests use 1024), and the per-pixel
+ * standard errors are honest (no heavy tail of rare paths whose
+ * throughput grew).
  *
  * Determinism: every random number is sg_rng_float(seed, path, bounce,
  * dim) with path = pixel * SG_REF_MAX_SPP + sample index, so the image is

@@ -28,7 +28,7 @@
 #include "render/world.h"
 
 /* Bump when the path tracer's estimator changes. */
-#define SG_VERIFY_REF_VERSION 1u
+#define SG_VERIFY_REF_VERSION 2u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

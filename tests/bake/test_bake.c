@@ -210,13 +210,14 @@ static void test_bake_envmap_intensity_and_rotation(void **state)
         sg_world *w = sg_test_world_from_json(json);
         sg_bake *b = bake(w, 100000, 4, 32);
         size_t n;
-        const float *E = sg_bake_irradiance_data(b, 0, &n);
+        sg_bake_light_data(b, 0, &n);
         const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
         for (size_t i = 0; i < n; ++i) {
             sg_vec3 nrm = sg_pointset_normal(ps, i);
-            sum[c] += E[3 * i + 1];
-            vx[c] += E[3 * i + 1] * nrm.x;
-            vz[c] += E[3 * i + 1] * nrm.z;
+            double e = sg_bake_splat_irradiance(b, w, 0, i, 0).y;
+            sum[c] += e;
+            vx[c] += e * nrm.x;
+            vz[c] += e * nrm.z;
         }
         sg_bake_destroy(b);
         sg_world_destroy(w);
@@ -257,7 +258,7 @@ static void compare_with_reference(const sg_bake *b, const sg_world *w, const sg
             else if (lookup)
                 v = sg_bake_lookup(b, w, &h, sg_v3_scale(ray.dir, -1.0f)).y;
             else
-                v = sg_world_albedo(w, &h).y * sg_bake_irradiance(b, w, &h).y / 3.14159265358979;
+                v = sg_world_albedo(w, &h).y * sg_bake_irradiance(b, w, &h, sg_v3_scale(ray.dir, -1.0f)).y / 3.14159265358979;
             num += (v - ref) * (v - ref);
             den += ref * ref;
             sa += v;
@@ -501,9 +502,9 @@ static void test_bake_deterministic_across_threads(void **state)
     assert_memory_equal(a.data, c.data, sizeof(float) * 3 * 32 * 32);
     for (uint32_t m = 0; m < 2; ++m) {
         size_t n1, n2;
-        const float *e1 = sg_bake_irradiance_data(b1, m, &n1), *e2 = sg_bake_irradiance_data(b2, m, &n2);
+        const float *e1 = sg_bake_light_data(b1, m, &n1), *e2 = sg_bake_light_data(b2, m, &n2);
         assert_int_equal(n1, n2);
-        assert_memory_equal(e1, e2, 3 * n1 * sizeof(float));
+        assert_memory_equal(e1, e2, SG_BAKE_SPLAT_FLOATS * n1 * sizeof(float));
         assert_int_equal(sg_bake_sample_count(b1, m), sg_bake_sample_count(b2, m));
         int r1, r2;
         size_t c1 = 0, c2 = 0;

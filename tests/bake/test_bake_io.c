@@ -51,7 +51,8 @@ static sg_bake_desc bake_desc(size_t photons)
 {
     /* Resolved: a bake's photon pass is traced with the resolved desc (its
      * flags say whether photons record direct light). */
-    sg_bake_desc d = {.photons = {.count = photons, .seed = 7, .max_depth = 6}, .gather = {.k = 32}};
+    sg_bake_desc d = {.indirect = SG_BAKE_INDIRECT_PHOTONS, .photons = {.count = photons, .seed = 7, .max_depth = 6},
+                      .gather = {.k = 32}};
     return sg_bake_desc_resolve(&d);
 }
 
@@ -154,9 +155,9 @@ static void test_bake_io_roundtrip(void **state)
     assert_int_equal(sg_bake_model_count(c), sg_world_model_count(w));
     for (uint32_t m = 0; m < sg_bake_model_count(b); ++m) {
         size_t nb, nc;
-        const float *eb = sg_bake_irradiance_data(b, m, &nb), *ec = sg_bake_irradiance_data(c, m, &nc);
+        const float *eb = sg_bake_light_data(b, m, &nb), *ec = sg_bake_light_data(c, m, &nc);
         assert_int_equal(nb, nc);
-        assert_memory_equal(eb, ec, 3 * nb * sizeof(float));
+        assert_memory_equal(eb, ec, SG_BAKE_SPLAT_FLOATS * nb * sizeof(float));
     }
     sg_image ib, ic;
     render(b, w, &ib);
@@ -319,14 +320,14 @@ static void test_bake_io_bad_values(void **state)
     const char *path = tmp_path("values.sgbake"), *bad = tmp_path("bad.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     char msg[256];
-    rewrite(path, bad, "E001", 3 * 17 + 1, NAN, 0);
-    snprintf(msg, sizeof msg, "%s: model 1, splat 17: irradiance is NaN", bad);
+    rewrite(path, bad, "E001", SG_BAKE_SPLAT_FLOATS * 17 + 1, NAN, 0);
+    snprintf(msg, sizeof msg, "%s: model 1, splat 17: front visibility ratio is NaN", bad);
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, msg);
-    rewrite(path, bad, "E000", 3 * 5, -1.0f, 0);
-    snprintf(msg, sizeof msg, "%s: model 0, splat 5: irradiance is negative", bad);
+    rewrite(path, bad, "E000", SG_BAKE_SPLAT_FLOATS * 5 + 10, -1.0f, 0);
+    snprintf(msg, sizeof msg, "%s: model 0, splat 5: back indirect irradiance is negative", bad);
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, msg);
-    rewrite(path, bad, "E000", 0, INFINITY, 0);
-    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "model 0, splat 0: irradiance is infinite");
+    rewrite(path, bad, "E000", 3, INFINITY, 0);
+    expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "model 0, splat 0: front indirect irradiance is infinite");
     rewrite(path, bad, "none", 0, 0.0f, SG_BAKE_FLAG_CHECKPOINT);
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_INVALID_ARG, "a checkpoint of an unfinished bake");
     /* META that contradicts the header's parameter hash */
@@ -377,7 +378,7 @@ static void test_bake_io_glossy_roundtrip(void **state)
         size_t nb = 0, nc = 0, splats;
         const uint32_t *sb, *sc, *qb, *qc;
         const uint16_t *gb, *gc;
-        sg_bake_irradiance_data(b, m, &splats);
+        sg_bake_light_data(b, m, &splats);
         sg_bake_glossy_data(b, m, &rb, &nb, &sb, &qb, &gb);
         sg_bake_glossy_data(c, m, &rc, &nc, &sc, &qc, &gc);
         assert_int_equal(rb, rc);
@@ -451,8 +452,8 @@ static void test_bake_io_glossy_corrupt(void **state)
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_CORRUPT, "section P000: sample point 0 names splat 3000000");
     rewrite(path, bad, "META", 0, float_of_bits(2u), 0);
     expect_load_fails(bad, w, SCENE_HASH, SG_ERR_UNSUPPORTED,
-                      "section META: layout 2, this build reads 3 (made before sample points and glossy bins; bake "
-                      "again)");
+                      "section META: layout 2, this build reads 4 (made before light per side and the transport solve; "
+                      "bake again)");
     sg_bake_destroy(b);
     sg_world_destroy(w);
 }

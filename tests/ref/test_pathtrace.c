@@ -305,6 +305,72 @@ static void test_ref_per_pixel_z_test(void **state)
     sg_world_destroy(w);
 }
 
+/* Honest error bars: two independent references (other seeds) of a white
+ * sphere with holes between its splats (radii x 0.45) in a uniform sky,
+ * where paths that slip inside bounce for a long time. Per pixel z =
+ * (a - b) / sqrt(se_a^2 + se_b^2) must be a standard normal variable: with
+ * 128 paths per pixel the sample variances make z a Student-t variable of
+ * about 250 degrees of freedom, normal to 0.2% in its quantiles. Checked
+ * over the 24 x 24 pixels (green channel; the sky is grey, so the other
+ * channels repeat it): the Kolmogorov-Smirnov distance to the normal CDF
+ * below its 1% critical value 1.628 / sqrt(576) = 0.068, the mean of z^2
+ * within 4 standard errors (sqrt(2 / 576) each) of 1, and at most 8 pixels
+ * beyond |z| = 3 (0.27% of 576 is 1.6; P(X >= 9) < 1e-3 for a binomial of
+ * p = 0.0035, the t tail). Russian roulette that let a path's throughput
+ * grow above 1 made rare paths carry hundreds of times the light of
+ * others: their pixels' standard errors understate the error and z has
+ * far heavier tails (this test then fails). */
+static void test_ref_z_scores_are_standard_normal(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,"
+                                          "\"radius_scale\":0.45,\"material\":{\"albedo\":[1,1,1],"
+                                          "\"use_point_colors\":false}}],"
+                                          "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
+    sg_ref_desc d = desc_look(sg_v3(0, 0.4f, 2.6f), sg_v3(0, 0, 0), 45.0f, 24, 128, 1024);
+    sg_ref_result a, b;
+    assert_int_equal(sg_ref_render(w, &d, &a, NULL), SG_OK);
+    d.seed = 8;
+    assert_int_equal(sg_ref_render(w, &d, &b, NULL), SG_OK);
+    enum { N = 24 * 24 };
+    double z[N], z2 = 0.0;
+    int n = 0, tail = 0;
+    for (int i = 0; i < N; ++i) {
+        double sa = a.std_error.data[3 * i + 1], sb = b.std_error.data[3 * i + 1];
+        double s = sqrt(sa * sa + sb * sb), diff = (double)a.mean.data[3 * i + 1] - (double)b.mean.data[3 * i + 1];
+        if (!(s > 0.0))
+            continue; /* a pixel every path of which saw the same light */
+        z[n] = diff / s;
+        z2 += z[n] * z[n];
+        tail += fabs(z[n]) > 3.0;
+        ++n;
+    }
+    assert_true(n > N / 2);
+    /* Kolmogorov-Smirnov: sort, then the largest gap to Phi. */
+    for (int i = 1; i < n; ++i)
+        for (int j = i; j > 0 && z[j - 1] > z[j]; --j) {
+            double t = z[j];
+            z[j] = z[j - 1];
+            z[j - 1] = t;
+        }
+    double ks = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double phi = 0.5 * erfc(-z[i] / sqrt(2.0));
+        double lo = phi - (double)i / n, hi = (double)(i + 1) / n - phi;
+        ks = fmax(ks, fmax(lo, hi));
+    }
+    double mz2 = z2 / n, crit = 1.628 / sqrt((double)n), band = 4.0 * sqrt(2.0 / n);
+    fprintf(stderr, "z-scores of %d pixels: KS distance %.4f (bound %.4f), mean z^2 %.3f, %d beyond 3\n", n, ks, crit,
+            mz2, tail);
+    if (!(ks <= crit) || !(fabs(mz2 - 1.0) <= band) || tail > 8)
+        fail_msg("per-pixel z-scores are not standard normal: KS %.4f (bound %.4f), mean z^2 %.3f (1 +- %.3f), "
+                 "%d pixels beyond |z| = 3 (at most 8)",
+                 ks, crit, mz2, band, tail);
+    sg_ref_result_free(&a);
+    sg_ref_result_free(&b);
+    sg_world_destroy(w);
+}
+
 /* Progressive passes: 8 + 24 paths over disjoint sample ranges, merged,
  * equal the single 32-path render (same paths), to float rounding of the
  * recovered sums. */
@@ -347,6 +413,7 @@ int main(void)
         cmocka_unit_test(test_ref_deterministic_across_threads),
         cmocka_unit_test(test_ref_variance_falls_as_one_over_n),
         cmocka_unit_test(test_ref_per_pixel_z_test),
+        cmocka_unit_test(test_ref_z_scores_are_standard_normal),
         cmocka_unit_test(test_ref_progressive_merge_equals_single_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,0 +1,269 @@
+/* test_transport.c — the bake's sample sites and transport solve
+ * (bake/transport.h):
+ *  1. a site's rays estimate the unshadowed irradiance without bias, and
+ *     the visibility ratio is exactly 1 where nothing blocks the light;
+ *  2. a site's figures do not depend on which other sites are gathered in
+ *     the same call, nor on the thread count;
+ *  3. sites inside a closed model stop after the pilot rays: no light,
+ *     every hit on a back side;
+ *  4. the solve reproduces a white furnace exactly (every site's
+ *     E0 ratio + indirect equals E0), and an albedo-rho furnace by its
+ *     closed form on an enclosure;
+ *  5. the bake's lookup from inside a closed model is dark, as the
+ *     reference is, while outside it is lit (light per side). */
+#include "test_support.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "bake/bake.h"
+#include "bake/samples.h"
+#include "bake/transport.h"
+#include "envmap/irradiance_table.h"
+#include "ref/pathtrace.h"
+#include "render/world.h"
+
+
+static sg_sample_set every_splat(const sg_pointset *ps, size_t n)
+{
+    sg_sample_set set = {0};
+    set.splat = test_malloc(n * sizeof *set.splat);
+    set.level = test_calloc(n, sizeof *set.level);
+    for (size_t i = 0; i < n; ++i)
+        set.splat[i] = (uint32_t)(i * (ps->count / n));
+    set.count = set.capacity = n;
+    return set;
+}
+
+static void free_set(sg_sample_set *set)
+{
+    test_free(set->splat);
+    test_free(set->level);
+}
+
+/* 1. On the ground alone under the sun-and-sky map nothing blocks any ray:
+ * every site's ratio is 1 exactly and no ray hits. E_u of the front side
+ * estimates E0(+Y) = sg_envmap_irradiance without bias: over 256 sites
+ * with independent lattice shifts the mean is within 4 standard errors
+ * (the spread of the 256 estimates / 16) of the exact value. */
+static void test_transport_unshadowed_estimate_unbiased(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":4096}],"
+                                          "\"envmap\":{\"builtin\":\"sunsky\"}}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    sg_sample_set set = every_splat(ps, 256);
+    sg_site_data sd = {0};
+    sg_transport_desc td = {.env_rays = 16, .cos_rays = 16, .seed = 3};
+    sg_error err = {0};
+    if (sg_transport_gather(w, 0, &set, 0, &td, &sd, &err) != SG_OK)
+        fail_msg("gather: %s", err.message);
+    assert_int_equal(sd.count, 256);
+    assert_int_equal(sd.hits, 0);
+    double exact = sg_envmap_irradiance(sg_world_envmap(w), sg_v3(0, 1, 0)).y, sum = 0, sum2 = 0;
+    for (size_t j = 0; j < 256; ++j) {
+        for (int c = 0; c < 3; ++c)
+            if (sd.ratio[6 * j + c] != 1.0f)
+                fail_msg("site %zu: ratio %.9g where nothing blocks the light", j, (double)sd.ratio[6 * j + c]);
+        double e = sd.unshadowed[6 * j + 1];
+        sum += e;
+        sum2 += e * e;
+    }
+    double mean = sum / 256, sd_e = sqrt(fmax(0.0, (sum2 - 256 * mean * mean) / 255)), se = sd_e / 16;
+    fprintf(stderr, "unshadowed irradiance: mean of 256 sites %.5f, exact %.5f, standard error %.2g\n", mean, exact,
+            se);
+    if (!(fabs(mean - exact) <= 4.0 * se + 1e-5 * exact))
+        fail_msg("E_u mean %.6f, exact %.6f (4 standard errors %.3g)", mean, exact, 4 * se);
+    sg_site_data_free(&sd);
+    free_set(&set);
+    sg_world_destroy(w);
+}
+
+/* 2. Gathering sites 0..n in one call, or 0..n/2 and then the rest, on 1
+ * or 2 threads gives the same bits. */
+static void test_transport_sites_independent(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":4000,"
+                                          "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\","
+                                          "\"points\":4000}],\"envmap\":{\"builtin\":\"sky\"}}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    sg_sample_set set = every_splat(ps, 100);
+    sg_transport_desc td = {.env_rays = 8, .cos_rays = 8, .seed = 9, .threads = 1};
+    sg_site_data a = {0}, b = {0};
+    assert_int_equal(sg_transport_gather(w, 0, &set, 0, &td, &a, NULL), SG_OK);
+    set.count = 37;
+    td.threads = 2;
+    assert_int_equal(sg_transport_gather(w, 0, &set, 0, &td, &b, NULL), SG_OK);
+    set.count = 100;
+    assert_int_equal(sg_transport_gather(w, 0, &set, 0, &td, &b, NULL), SG_OK);
+    assert_int_equal(a.count, b.count);
+    assert_int_equal(a.hits, b.hits);
+    assert_true(a.hits > 0);
+    assert_memory_equal(a.ratio, b.ratio, 6 * a.count * sizeof(float));
+    assert_memory_equal(a.unshadowed, b.unshadowed, 6 * a.count * sizeof(float));
+    assert_memory_equal(a.first, b.first, (2 * a.count + 1) * sizeof(size_t));
+    assert_memory_equal(a.hit_splat, b.hit_splat, a.hits * sizeof(uint32_t));
+    assert_memory_equal(a.hit_model, b.hit_model, a.hits * sizeof(uint32_t));
+    assert_memory_equal(a.hit_k, b.hit_k, a.hits * sizeof(float));
+    sg_site_data_free(&a);
+    sg_site_data_free(&b);
+    free_set(&set);
+    sg_world_destroy(w);
+}
+
+/* 3. The back sides of a closed sphere's splats look into the sphere: a
+ * site whose pilot rays (at most 8) all meet back sides stops there, with
+ * ratio 0. Their front sides see only the sky (no hit on the convex
+ * sphere, ratio 1). A few back sites see a ray leave the sphere: a ray
+ * that grazes the inside of the wall meets it again within a splat radius
+ * at a normal within 25 degrees of its own, which the self test of ray.h
+ * takes for its own surface (0.12% of cosine-distributed rays from inside
+ * this sphere, measured); those sites trace all their rays. So: at least
+ * 90% of the back sites stop after the pilot, and the back sides' mean
+ * ratio is below 1e-3 (measured 3e-4). */
+static void test_transport_inside_closed_model(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}],"
+                                          "\"envmap\":{\"builtin\":\"sky\"}}");
+    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    sg_sample_set set = every_splat(ps, 200);
+    sg_transport_desc td = {.env_rays = 32, .cos_rays = 64, .seed = 4};
+    sg_site_data sd = {0};
+    assert_int_equal(sg_transport_gather(w, 0, &set, 0, &td, &sd, NULL), SG_OK);
+    size_t stopped = 0;
+    double back_ratio = 0.0;
+    for (size_t j = 0; j < sd.count; ++j) {
+        size_t f0 = sd.first[2 * j], f1 = sd.first[2 * j + 1], b1 = sd.first[2 * j + 2];
+        if (f1 != f0)
+            fail_msg("site %zu, front: %zu rays hit the convex sphere", j, f1 - f0);
+        if (b1 == f1)
+            fail_msg("site %zu, back: no ray met the inside of the sphere", j);
+        int inside = b1 - f1 <= 8;
+        for (size_t h = f1; h < b1 && inside; ++h)
+            inside = (sd.hit_model[h] & 1u) != 0;
+        stopped += inside;
+        for (int c = 0; c < 3; ++c)
+            if (sd.ratio[6 * j + c] != 1.0f || (inside && sd.ratio[6 * j + 3 + c] != 0.0f))
+                fail_msg("site %zu: ratios %g (front), %g (back)", j, (double)sd.ratio[6 * j + c],
+                         (double)sd.ratio[6 * j + 3 + c]);
+        back_ratio += sd.ratio[6 * j + 4];
+    }
+    back_ratio /= (double)sd.count;
+    fprintf(stderr, "closed sphere: %zu of %zu back sites stopped after the pilot; back ratio %.3g\n", stopped,
+            sd.count, back_ratio);
+    if (!(stopped >= 0.9 * (double)sd.count) || !(back_ratio < 1e-3))
+        fail_msg("%zu of %zu back sites inside (90%% expected), mean back ratio %.3g (bound 1e-3)", stopped, sd.count,
+                 back_ratio);
+    sg_site_data_free(&sd);
+    free_set(&set);
+    sg_world_destroy(w);
+}
+
+/* Looked-up frame mean and the largest deviation from `expect` over the
+ * covered pixels (green). */
+static void furnace_frame(const sg_bake *b, const sg_world *w, sg_vec3 eye, sg_vec3 look, double expect,
+                          double *mean, double *worst)
+{
+    sg_bake_frame_desc fd = {.width = 48, .height = 48};
+    if (sg_camera_look_at(eye, look, sg_v3(0, 1, 0), 40.0f, 1.0f, &fd.camera, NULL) != SG_OK)
+        fail_msg("camera");
+    sg_image img;
+    assert_int_equal(sg_bake_render(b, w, &fd, &img, NULL, NULL), SG_OK);
+    double sum = 0, dev = 0;
+    size_t n = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x) {
+            sg_ray r = sg_camera_ray(&fd.camera, (float)x + 0.5f, (float)y + 0.5f, 48, 48);
+            sg_world_hit h;
+            if (!sg_world_intersect(w, &r, &h, NULL))
+                continue;
+            double v = img.data[3 * (y * 48 + x) + 1];
+            sum += v;
+            dev = fmax(dev, fabs(v / expect - 1.0));
+            ++n;
+        }
+    assert_true(n > 100);
+    *mean = sum / (double)n;
+    *worst = dev;
+    sg_image_free(&img);
+}
+
+/* 4. White furnace (albedo 1, uniform sky L): the sites' weights are scaled
+ * to integrate cos exactly, so every site's E0 ratio + indirect is E0 and
+ * the solve has nothing to add noise to: each covered pixel is L to the
+ * solve's tolerance (1e-5) and the interpolation's rounding. The issue's
+ * bounds are 3% per pixel and 0.5% for the mean; 1% per pixel is asked
+ * here, which the first estimator (photons, pixels 0.26 to 1.29 on a
+ * statue) fails by far. The scene has a contact region (the sphere on the
+ * plane), a concave model (the bunny) and the ground's rim. */
+static void test_transport_white_furnace_every_pixel(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json(
+        "{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,\"transform\":{\"translate\":[-1.2,1,0]},"
+        "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false}},"
+        "{\"builtin\":\"bunny\",\"points\":30000,\"transform\":{\"translate\":[1.2,0,0],\"scale\":0.2},"
+        "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false}},"
+        "{\"builtin\":\"ground\",\"points\":20000,\"transform\":{\"scale\":0.2},"
+        "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false}}],"
+        "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
+    sg_bake_desc d = {.photons = {.seed = 5}};
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    double mean, worst;
+    furnace_frame(b, w, sg_v3(0, 3.0f, 5.0f), sg_v3(0, 0.8f, 0), 0.7, &mean, &worst);
+    fprintf(stderr, "white furnace: mean %.5f (0.7), largest pixel deviation %.4f\n", mean, worst);
+    if (!(fabs(mean / 0.7 - 1.0) <= 0.005) || !(worst <= 0.01))
+        fail_msg("furnace: mean %.5f (0.7 within 0.5%%), a pixel %.2f%% off (bound 1%%)", mean, 100 * worst);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* 5. Light per side. From the centre of a closed sphere under the sky the
+ * reference sees (almost) nothing: only light through gaps between
+ * splats. The bake's lookup of the inside (back) sides must be as dark:
+ * its mean below 1% of the outside's (it is 0 here: the sites inside see
+ * only the inside). The same sphere from outside is lit. */
+static void test_transport_camera_inside_closed_model(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,"
+                                          "\"material\":{\"albedo\":[0.7,0.7,0.7],\"use_point_colors\":false}}],"
+                                          "\"envmap\":{\"builtin\":\"sky\"}}");
+    sg_bake_desc d = {.photons = {.seed = 5}};
+    sg_bake *b = NULL;
+    assert_int_equal(sg_bake_create(w, &d, &b, NULL), SG_OK);
+    double inside, outside, worst;
+    furnace_frame(b, w, sg_v3(0, 0, 0.01f), sg_v3(0, 0, -1), 1.0, &inside, &worst);
+    furnace_frame(b, w, sg_v3(0, 0.5f, 3.0f), sg_v3(0, 0, 0), 1.0, &outside, &worst);
+    sg_ref_desc rd = {.width = 16, .height = 16, .spp = 64, .max_depth = 8, .seed = 3};
+    sg_camera_look_at(sg_v3(0, 0, 0.01f), sg_v3(0, 0, -1), sg_v3(0, 1, 0), 40.0f, 1.0f, &rd.camera, NULL);
+    sg_ref_result r;
+    assert_int_equal(sg_ref_render(w, &rd, &r, NULL), SG_OK);
+    fprintf(stderr, "closed sphere: inside %.3g, outside %.3g, reference inside %.3g\n", inside, outside,
+            r.mean_radiance[1]);
+    if (!(inside <= 0.01 * outside) || !(r.mean_radiance[1] <= 0.01 * outside))
+        fail_msg("inside a closed sphere: bake %.4g, reference %.4g, outside %.4g", inside, r.mean_radiance[1],
+                 outside);
+    sg_ref_result_free(&r);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_transport_unshadowed_estimate_unbiased),
+        cmocka_unit_test(test_transport_sites_independent),
+        cmocka_unit_test(test_transport_inside_closed_model),
+        cmocka_unit_test(test_transport_white_furnace_every_pixel),
+        cmocka_unit_test(test_transport_camera_inside_closed_model),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
