@@ -1,6 +1,8 @@
-/* bench_bake — the bake's cost (time, memory, file size) against model size
- * and photon count, and its error against time next to the reference path
- * tracer's: the "bake" issue's benchmark (DESIGN.md "Measuring").
+/* bench_bake — the PHOTON estimator's cost (time, memory, file size)
+ * against model size and photon count, and its error against time next to
+ * the reference path tracer's: the benchmark of the bake's first estimator
+ * (SG_BAKE_INDIRECT_PHOTONS; the default transport estimator's is
+ * bench_gi.c), kept to compare the two (DESIGN.md "Measuring").
  *
  * Scene: as bench_ref.c, the same construction and view: the Stanford
  * dragon sampled to each size, scaled to SCENE_LENGTH units along its
@@ -770,7 +772,7 @@ static sg_status measure_bakes(const sg_world *w, const sg_camera *cam, uint64_t
 {
     if (nks == 0)
         return SG_OK;
-    sg_bake_desc d = {0};
+    sg_bake_desc d = {.indirect = SG_BAKE_INDIRECT_PHOTONS};
     d.photons.count = photons;
     d.photons.seed = BAKE_SEED;
     d.photons.threads = o->threads;
@@ -967,7 +969,7 @@ static sg_status retime_target(const sg_world *w, const sg_camera *cam, const op
         *rr = again;
     t->ref_paths_s_big = rr->paths_s;
     t->ref_t_big = t->ref_spp * (double)o->frame_size * o->frame_size / t->ref_paths_s_big;
-    sg_bake_desc d = {0};
+    sg_bake_desc d = {.indirect = SG_BAKE_INDIRECT_PHOTONS};
     d.photons.count = t->bake->photons;
     d.photons.seed = BAKE_SEED;
     d.photons.threads = o->threads;
@@ -1175,7 +1177,7 @@ static void write_md(FILE *f, const void *ctx)
                "then `sg_bake_create_from_photons` once per (k, direct) on the same map (bake s = trace s + "
                "gather s, what `sg_bake_create` takes). direct: `photons` = `direct_samples` -1, the photons "
                "carry the direct light too and the gather is the kNN estimate alone; `S = n` = the direct light "
-               "by n + n shadow rays per sample point (envmap and cosine sampling, bake/direct.h; 32 is the "
+               "by n + n shadow rays per sample point (envmap and cosine sampling, bake/transport.h; 32 is the "
                "library's default) at `sample points` (bake/samples.h: the material's default spacing, 4 median "
                "splat radii for these Lambert models, refined twice where the light changes fast, then "
                "interpolated to every splat: the library's default) or at `every splat` (sample_spacing < 0, "

@@ -1,8 +1,9 @@
-/* splatgi-bake — the bake program: reads a scene file, traces the photon
- * pass in chunks with a progress display, gathers irradiance at every
- * splat (direct light at sample points, glossy bins) and writes the .sgbake file atomically. Ctrl-C stops at the next
- * photon block and writes a checkpoint (OUT.ckpt) that --resume continues;
- * the resumed bake is the same file, byte for byte, as one run straight
+/* splatgi-bake — the bake program: reads a scene file, runs the bake as a
+ * job (bake/bake_job.h: sample sites and the transport solve, or the photon
+ * pass, then glossy bins) with a progress display, and writes the .sgbake
+ * file atomically. Ctrl-C stops the job within a block of work, at any
+ * stage, and writes a checkpoint (OUT.ckpt) that --resume continues; the
+ * resumed bake is the same file, byte for byte, as one run straight
  * through. Options, library calls and a report; the algorithms live in
  * src/bake/.
  */
@@ -19,20 +20,30 @@
 #include "bake/bake.h"
 #include "bake/bake_file.h"
 #include "bake/bake_io.h"
+#include "bake/bake_job.h"
 #include "io/scene_file.h"
 #include "render/world.h"
 
 static const char usage[] =
     "usage: splatgi-bake SCENE.json [-o OUT.sgbake] [options]\n"
-    "Bakes the scene's global illumination (photon pass + irradiance gather) into OUT.\n"
+    "Bakes the scene's global illumination into OUT: light per side of every splat,\n"
+    "from rays at sample points (direct light, and the surfaces that send indirect\n"
+    "light, solved for every bounce), and glossy bins for glossy models.\n"
     "  -o, --out FILE    the bake (default: SCENE with .sgbake for .json)\n"
-    "  --photons N       photons shot (default 1000000)\n"
-    "  --k K             photons per irradiance estimate, 1..1024 (default 64)\n"
+    "  --direct N        envmap-sampled rays per sample site (default 32)\n"
+    "  --gather-rays N   cosine-sampled rays per sample site (default 64)\n"
+    "  --sample-spacing X  spacing of the sample points in median splat radii\n"
+    "                    (default: from the material, 4 diffuse, 2 + 2 roughness\n"
+    "                    glossy); 'all' or a negative X: every splat\n"
+    "  --refine N        refinements of the sample points where light changes fast,\n"
+    "                    0..7 (default 2)\n"
     "  --seed S          random seed (default 1)\n"
+    "  --indirect transport|photons  the indirect light's estimator (default\n"
+    "                    transport); photons: the first estimator, a photon pass\n"
+    "                    gathered by density estimation at every splat:\n"
+    "  --photons N       photons shot (photons; default 1000000)\n"
+    "  --k K             photons per irradiance estimate, 1..1024 (default 64)\n"
     "  --max-depth D     surface interactions per photon (default 8)\n"
-    "  --sample-spacing X  spacing of the sample points (direct light, glossy bins) in\n"
-    "                    median splat radii (default: from the material, 4 diffuse,\n"
-    "                    2 + 2 roughness glossy); 'all' or a negative X: every splat\n"
     "  --glossy-res R    glossy bins per side, 4..32 (default: from the roughness)\n"
     "  --glossy-rays M   rays per glossy sample point (default 128)\n"
     "  --threads T       OpenMP threads (default: all); results do not depend on it\n"
@@ -41,7 +52,7 @@ static const char usage[] =
     "  --resume          continue from OUT.ckpt, left by an interrupted run with the\n"
     "                    same scene and options\n"
     "  --help\n"
-    "Ctrl-C stops at the next block of photons and writes OUT.ckpt (exit status 130);\n"
+    "Ctrl-C stops within a block of work and writes OUT.ckpt (exit status 130);\n"
     "a second Ctrl-C quits at once without one. A finished bake removes OUT.ckpt.\n";
 
 /* Set by the SIGINT handler, read by the progress callback and between
@@ -64,8 +75,9 @@ typedef struct options {
 
 typedef struct progress {
     int tty;            /* stderr is a terminal: one line redrawn in place  */
-    double t0;          /* when this run's tracing began (omp_get_wtime)    */
-    size_t start_done;  /* photons already done when it began (resume)      */
+    double t0;          /* when this stage began (omp_get_wtime)            */
+    size_t start_done;  /* units already done when it began (resume)        */
+    int stage, level;   /* the stage and level the line is about            */
     double last_print;  /* plain mode: when the last line was printed       */
     int drawn;          /* tty mode: a progress line is on screen           */
 } progress;
@@ -102,35 +114,53 @@ static void fmt_duration(double s, char *buf, size_t size)
 
 static double mib(size_t bytes) { return (double)bytes / (1024.0 * 1024.0); }
 
-/* The photon pass's progress callback: runs on the main thread only
- * (photons.h), so it may print; returns nonzero after Ctrl-C. */
-static int on_progress(void *user, size_t done, size_t total)
-{
-    progress *p = user;
-    double now = omp_get_wtime(), t = now - p->t0;
-    double rate = t > 0.0 ? (double)(done - p->start_done) / t : 0.0;
-    char left[32];
-    fmt_duration(rate > 0.0 ? (double)(total - done) / rate : -1.0, left, sizeof left);
-    double pct = 100.0 * (double)done / (double)total;
-    if (p->tty) {
-        fprintf(stderr, "\r  %5.1f%%  %zu of %zu photons  %.3f Mphotons/s  %s left   ", pct, done, total,
-                rate * 1e-6, left);
-        fflush(stderr);
-        p->drawn = 1;
-    } else if (now - p->last_print >= 5.0 || done == total) {
-        fprintf(stderr, "splatgi-bake: %5.1f%%, %zu of %zu photons, %.3f Mphotons/s, %s left\n", pct, done, total,
-                rate * 1e-6, left);
-        p->last_print = now;
-    }
-    return interrupted != 0;
-}
-
 static void end_progress_line(progress *p)
 {
     if (p->tty && p->drawn) {
         fputc('\n', stderr);
         p->drawn = 0;
     }
+}
+
+static const char *stage_name(const sg_bake_progress *q, char *buf, size_t size)
+{
+    if (q->stage == SG_BAKE_STAGE_PHOTONS)
+        return "photons";
+    if (q->stage == SG_BAKE_STAGE_SITES) {
+        snprintf(buf, size, "sample points, level %d", q->level);
+        return buf;
+    }
+    return "glossy sample points";
+}
+
+/* The job's progress callback: runs on the main thread only (bake_job.h),
+ * so it may print; returns nonzero after Ctrl-C. */
+static int on_progress(void *user, const sg_bake_progress *q)
+{
+    progress *p = user;
+    double now = omp_get_wtime();
+    if ((int)q->stage != p->stage || q->level != p->level) { /* a new stage: a new line */
+        end_progress_line(p);
+        p->stage = (int)q->stage;
+        p->level = q->level;
+        p->t0 = now;
+        p->start_done = q->done;
+    }
+    double t = now - p->t0;
+    double rate = t > 0.0 ? (double)(q->done - p->start_done) / t : 0.0;
+    char left[32], name[64];
+    fmt_duration(rate > 0.0 && q->total >= q->done ? (double)(q->total - q->done) / rate : -1.0, left, sizeof left);
+    double pct = q->total ? 100.0 * (double)q->done / (double)q->total : 100.0;
+    const char *what = stage_name(q, name, sizeof name);
+    if (p->tty) {
+        fprintf(stderr, "\r  %5.1f%%  %zu of %zu %s  %s left   ", pct, q->done, q->total, what, left);
+        fflush(stderr);
+        p->drawn = 1;
+    } else if (now - p->last_print >= 5.0 || q->done == q->total) {
+        fprintf(stderr, "splatgi-bake: %5.1f%%, %zu of %zu %s, %s left\n", pct, q->done, q->total, what, left);
+        p->last_print = now;
+    }
+    return interrupted != 0;
 }
 
 /* Returns 0 to go on, 1 for an error, 2 after --help. */
@@ -166,6 +196,25 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--max-depth")) {
             if (!parse_u64(a, v, 1, 1024, &n)) return 1;
             o->desc.photons.max_depth = (int)n;
+            ++i;
+        } else if (!strcmp(a, "--direct")) {
+            if (!parse_u64(a, v, 1, 1 << 20, &n)) return 1;
+            o->desc.direct_samples = (int)n;
+            ++i;
+        } else if (!strcmp(a, "--gather-rays")) {
+            if (!parse_u64(a, v, 1, 1 << 20, &n)) return 1;
+            o->desc.gather_rays = (int)n;
+            ++i;
+        } else if (!strcmp(a, "--refine")) {
+            if (!parse_u64(a, v, 0, 7, &n)) return 1;
+            o->desc.refine_levels = n ? (int)n : -1;
+            ++i;
+        } else if (!strcmp(a, "--indirect")) {
+            if (!v || (strcmp(v, "transport") && strcmp(v, "photons"))) {
+                fprintf(stderr, "splatgi-bake: %s: '%s' is not 'transport' or 'photons'\n", a, v ? v : "");
+                return 1;
+            }
+            o->desc.indirect = !strcmp(v, "photons") ? SG_BAKE_INDIRECT_PHOTONS : SG_BAKE_INDIRECT_TRANSPORT;
             ++i;
         } else if (!strcmp(a, "--sample-spacing")) {
             char *end = NULL;
@@ -242,7 +291,7 @@ int main(int argc, char **argv)
     sg_error err = {0};
     sg_scene_file sf = {0};
     sg_world *world = NULL;
-    sg_photon_map pm = {0};
+    sg_bake_job *job = NULL;
     sg_bake *bake = NULL;
     double t_start = omp_get_wtime();
 
@@ -283,36 +332,40 @@ int main(int argc, char **argv)
         splats += sg_scene_points(sg_world_scene(world, (uint32_t)m))->count;
 
     if (o.resume) {
-        if (sg_bake_checkpoint_load(ckpt, world, &d, scene_hash, &pm, &err) != SG_OK) {
+        if (sg_bake_job_load(ckpt, world, &d, scene_hash, &job, &err) != SG_OK) {
             fail(err.message);
             if (err.status == SG_ERR_INVALID_ARG)
                 fprintf(stderr, "splatgi-bake: resume with the scene and options of the interrupted run\n");
             goto done;
         }
-    } else if (have_ckpt) {
-        fprintf(stderr, "splatgi-bake: note: %s exists; starting over (--resume continues it)\n", ckpt);
+    } else {
+        if (have_ckpt)
+            fprintf(stderr, "splatgi-bake: note: %s exists; starting over (--resume continues it)\n", ckpt);
+        if (sg_bake_job_create(world, &d, &job, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
     }
-
-    size_t nblocks = sg_photon_block_count(&d.photons);
-    /* Chunks bound the scratch memory (records are copied into the map
-     * after each chunk) and keep every thread busy: 16 blocks a thread at
-     * least, at most 64 chunks. Ctrl-C needs no chunk end: the progress
-     * callback cancels at the next block and the map keeps the prefix. */
     int threads = o.threads > 0 ? o.threads : omp_get_max_threads();
-    size_t chunk = (nblocks + 63) / 64;
-    if (chunk < (size_t)threads * 16)
-        chunk = (size_t)threads * 16;
     printf("splatgi-bake: %s: %zu models, %zu splats, world built in %.2f s\n", o.scene, models, splats, t_world);
-    printf("splatgi-bake: %zu photons in %zu blocks of %d, %d thread%s%s", d.photons.count, nblocks, SG_PHOTON_BLOCK,
-           threads, threads == 1 ? "" : "s", pm.blocks ? "" : "\n");
-    if (pm.blocks)
-        printf(", resuming after %zu photons (%zu blocks) from %s\n", pm.shot, pm.blocks, ckpt);
+    if (d.indirect == SG_BAKE_INDIRECT_PHOTONS)
+        printf("splatgi-bake: photon estimator: %zu photons in %zu blocks of %d, k %u; ", d.photons.count,
+               sg_photon_block_count(&d.photons), SG_PHOTON_BLOCK, d.gather.k);
+    else
+        printf("splatgi-bake: transport estimator: ");
+    printf("%d + %d rays per sample site, %d refinements, %d thread%s\n", d.direct_samples, d.gather_rays,
+           d.refine_levels > 0 ? d.refine_levels : 0, threads, threads == 1 ? "" : "s");
+    sg_bake_progress at = sg_bake_job_progress(job);
+    if (o.resume) {
+        char name[64];
+        printf("splatgi-bake: resuming from %s: %zu of %zu %s done\n", ckpt, at.done, at.total,
+               stage_name(&at, name, sizeof name));
+    }
     fflush(stdout);
 
-    progress prog = {.tty = isatty(STDERR_FILENO), .t0 = omp_get_wtime(), .start_done = pm.shot};
+    progress prog = {.tty = isatty(STDERR_FILENO), .t0 = omp_get_wtime(), .start_done = at.done,
+                     .stage = (int)at.stage, .level = at.level};
     prog.last_print = prog.t0;
-    d.photons.progress = on_progress;
-    d.photons.progress_user = &prog;
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
@@ -320,48 +373,33 @@ int main(int argc, char **argv)
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, NULL);
 
-    double t_trace0 = omp_get_wtime();
-    sg_status st = SG_OK;
-    while (pm.blocks < nblocks && !interrupted && st == SG_OK) {
-        size_t last = nblocks - pm.blocks > chunk ? pm.blocks + chunk : nblocks;
-        st = sg_photons_trace_more(world, &d.photons, last, &pm, &err);
-    }
-    double t_trace = omp_get_wtime() - t_trace0;
+    double t_run0 = omp_get_wtime();
+    sg_status st = sg_bake_job_run(job, on_progress, &prog, &err);
+    double t_run = omp_get_wtime() - t_run0;
     end_progress_line(&prog);
-    if (st != SG_OK && st != SG_ERR_CANCELLED) {
-        fail(err.message);
-        goto done;
-    }
-
-    sg_bake_stats bs = {0};
-    double t_gather = 0.0;
-    if (!interrupted) {
+    if (st == SG_ERR_CANCELLED || (st == SG_OK && interrupted)) {
         double t0 = omp_get_wtime();
-        if (sg_bake_create_from_photons(world, &d, &pm, &bake, &err) != SG_OK) {
+        if (sg_bake_job_save(job, ckpt, scene_hash, &err) != SG_OK) {
             fail(err.message);
             goto done;
         }
-        t_gather = omp_get_wtime() - t0;
-        sg_bake_get_stats(bake, &bs);
-    }
-    if (interrupted) { /* during the trace or the gather: keep the photons */
-        double t0 = omp_get_wtime();
-        if (sg_bake_checkpoint_save(ckpt, &d, &pm, scene_hash, &err) != SG_OK) {
-            fail(err.message);
-            goto done;
-        }
+        at = sg_bake_job_progress(job);
+        char name[64];
+        long long ck_size = stat(ckpt, &stbuf) == 0 ? (long long)stbuf.st_size : 0;
         fprintf(stderr,
-                "splatgi-bake: interrupted after %zu of %zu photons (%.1f%%); checkpoint %s written in %.2f s "
-                "(%.1f MiB)\n",
-                pm.shot, d.photons.count, 100.0 * (double)pm.shot / (double)d.photons.count, ckpt,
-                omp_get_wtime() - t0, mib(sg_photon_map_bytes(pm.count)));
+                "splatgi-bake: interrupted at %zu of %zu %s; checkpoint %s written in %.2f s (%.1f MiB)\n",
+                at.done, at.total, stage_name(&at, name, sizeof name), ckpt, omp_get_wtime() - t0,
+                (double)ck_size / 1048576.0);
         print_resume_command(argc, argv);
         rc = 130;
         goto done;
     }
-    size_t records = pm.count;
-    sg_photon_map_free(&pm);
-
+    if (st != SG_OK || sg_bake_job_finish(job, &bake, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
+    sg_bake_stats bs = {0};
+    sg_bake_get_stats(bake, &bs);
     double t0 = omp_get_wtime();
     if (sg_bake_save(bake, o.out, scene_hash, &err) != SG_OK) {
         fail(err.message);
@@ -372,21 +410,21 @@ int main(int argc, char **argv)
         fprintf(stderr, "splatgi-bake: warning: cannot remove %s: %s\n", ckpt, strerror(errno));
     long long file_size = stat(o.out, &stbuf) == 0 ? (long long)stbuf.st_size : -1;
 
-    size_t traced = bs.photons_shot - prog.start_done;
     printf("splatgi-bake: %s -> %s (%.2f MiB)\n", o.scene, o.out, file_size >= 0 ? (double)file_size / 1048576.0 : 0.0);
-    printf("  %-18s %zu photons in %.2f s (%.3f Mphotons/s); the pass: %zu records, %.2f M rays\n", "trace",
-           traced, t_trace, t_trace > 0 ? (double)traced / t_trace * 1e-6 : 0.0, records,
-           (double)bs.rays.rays * 1e-6);
-    printf("  %-18s k = %u, normal_cos = %g, %.2f s\n", "gather", d.gather.k, (double)d.gather.normal_cos,
-           t_gather - bs.direct_seconds - bs.glossy_seconds);
+    if (d.indirect == SG_BAKE_INDIRECT_PHOTONS)
+        printf("  %-18s %zu photons, %zu records, %.2f M rays, %.2f s; k = %u\n", "photons", bs.photons_shot,
+               bs.photon_records, (double)bs.rays.rays * 1e-6, bs.trace_seconds, d.gather.k);
     if (d.direct_samples > 0)
-        printf("  %-18s %d + %d shadow rays per sample point, %.2f s (with choosing and interpolating them)\n",
-               "direct light", d.direct_samples, d.direct_samples, bs.direct_seconds);
+        printf("  %-18s %d + %d rays per site (front and back of each sample point), %zu hit a surface; "
+               "%d solve sweeps; %.2f s\n",
+               "sample sites", d.direct_samples, d.gather_rays, bs.site_hits, bs.transport_iterations,
+               bs.direct_seconds);
     if (bs.glossy_points)
         printf("  %-18s %zu sample points, %d rays each, %.2f s\n", "glossy bins", bs.glossy_points,
                d.glossy_rays, bs.glossy_seconds);
     printf("  %-18s %.2f s\n", "write", t_write);
-    printf("  %-18s %.2f s (world %.2f s)\n", "total", omp_get_wtime() - t_start, t_world);
+    printf("  %-18s %.2f s (world %.2f s, bake %.2f s in this run)\n", "total", omp_get_wtime() - t_start, t_world,
+           t_run);
     printf("  %-18s %zu of %zu splats (%.2f%%)%s\n", "sample points", bs.sample_points, bs.splats,
            bs.splats ? 100.0 * (double)bs.sample_points / (double)bs.splats : 0.0,
            d.sample_spacing < 0.0f ? ", every splat (--sample-spacing all)" : "");
@@ -402,8 +440,10 @@ int main(int argc, char **argv)
             printf(", glossy bins %d x %d", res, res);
         printf("\n");
     }
-    printf("  %-18s %.1f MiB (freed before the write)\n", "photon records", mib(bs.photon_memory_bytes));
-    printf("  %-18s %.1f MiB (%zu splats x 3 floats)\n", "irradiance", mib(bs.irradiance_bytes), bs.splats);
+    if (d.indirect == SG_BAKE_INDIRECT_PHOTONS)
+        printf("  %-18s %.1f MiB (freed before the write)\n", "photon records", mib(bs.photon_memory_bytes));
+    printf("  %-18s %.1f MiB (%zu splats x %d floats)\n", "light", mib(bs.irradiance_bytes), bs.splats,
+           SG_BAKE_SPLAT_FLOATS);
     printf("  %-18s %.1f MiB (glossy models: sample point per splat, splat per sample point)\n", "sample points",
            mib(bs.sample_bytes));
     printf("  %-18s %.1f MiB (%zu points x 3 R^2 halves)\n", "glossy bins", mib(bs.glossy_bytes), bs.glossy_points);
@@ -411,7 +451,7 @@ int main(int argc, char **argv)
     rc = 0;
 done:
     sg_bake_destroy(bake);
-    sg_photon_map_free(&pm);
+    sg_bake_job_destroy(job);
     sg_world_destroy(world);
     sg_scene_file_free(&sf);
     return rc;

@@ -39,8 +39,8 @@
 #include <omp.h>
 #include <string.h>
 
+#include "bake/bake_job_int.h"
 #include "bake/glossy.h"
-#include "bake/samples.h"
 #include "bake/transport.h"
 #include "core/alloc.h"
 #include "envmap/irradiance_table.h"
@@ -48,20 +48,6 @@
 static const float INV_PI = 0.318309886183791f;
 
 enum { LOOKUP_SPLATS = 32, TILE = 16 };
-
-/* Refinement of the sample points (samples.h): levels at s/2 and s/4
- * (refine_levels), where neighbouring visibility ratios differ by more than
- * half the larger value (a shadow edge differs by a factor 2 or more) and
- * by more than three standard errors of the difference (noise alone, which
- * at 4 + 4 rays often exceeds 50%, then refines almost nowhere), or where
- * a site's harmonic mean distance to what its rays see (Ward 1988's R_h:
- * indirect light changes over about that distance) is below
- * REFINE_DISTANCE spacings. Interpolation support: twice a sample's spacing
- * (a splat then sees about 4 pi samples, which averages their noise
- * without reaching past the next ring). */
-static const float REFINE_THRESHOLD = 0.5f;
-static const float REFINE_DISTANCE = 1.0f;
-static const float SUPPORT = 2.0f;
 
 struct sg_bake {
     size_t models;
@@ -214,6 +200,20 @@ nomem:
     return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the irradiance of %zu models", models);
 }
 
+const sg_irradiance_table *sg_bake__table(const sg_bake *b) { return b->e0; }
+
+sg_bake_stats *sg_bake__stats(sg_bake *b) { return &b->stats; }
+
+void sg_bake__update_memory(sg_bake *b) { update_memory_stats(b); }
+
+/* sg_bake_create's adapter: the photon desc's progress callback sees the
+ * photon stage only. */
+static int photon_progress(void *user, const sg_bake_progress *p)
+{
+    const sg_photon_desc *pd = user;
+    return p->stage == SG_BAKE_STAGE_PHOTONS ? pd->progress(pd->progress_user, p->done, p->total) : 0;
+}
+
 float *sg_bake__light(sg_bake *b, uint32_t m)
 {
     assert(m < b->models);
@@ -255,321 +255,6 @@ void sg_bake__glossy(sg_bake *b, uint32_t m, uint32_t **splat, uint32_t **neares
     *bins = b->gbins[m];
 }
 
-/* One model's part of the pipeline. */
-typedef struct model_work {
-    const sg_pointset *ps;
-    float s0;            /* spacing of level 0; <= 0: every splat is a sample */
-    int sampled;         /* the model has sample points                     */
-    uint64_t key_base;   /* splats of the models before it: random streams  */
-    sg_sample_set set;
-    sg_site_data sites;
-    float *e0;           /* 6 per splat: unshadowed irradiance, both sides  */
-    uint32_t *nearest;   /* per splat: its nearest same-facing sample       */
-    float *indirect;     /* 6 per sample: the sites' solved indirect light  */
-} model_work;
-
-static void model_work_free(model_work *mw)
-{
-    sg_sample_set_free(&mw->set);
-    sg_site_data_free(&mw->sites);
-    sg_free(mw->e0);
-    sg_free(mw->nearest);
-    sg_free(mw->indirect);
-}
-
-static sg_status nearest_samples(model_work *mw, float normal_cos, int threads, sg_error *err)
-{
-    sg_free(mw->nearest);
-    if (!(mw->nearest = sg_alloc_array(mw->ps->count ? mw->ps->count : 1, sizeof *mw->nearest)))
-        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu splats' sample points", mw->ps->count);
-    if (mw->s0 > 0.0f)
-        return sg_samples_nearest(mw->ps, &mw->set, mw->s0, normal_cos, threads, mw->nearest, err);
-    for (size_t i = 0; i < mw->ps->count; ++i)
-        mw->nearest[i] = (uint32_t)i;
-    return SG_OK;
-}
-
-/* The transport solve over every model's current sites. */
-static sg_status solve_indirect(const sg_world *w, const sg_bake_desc *d, model_work *mw, size_t models,
-                                sg_transport_stats *ts, sg_error *err)
-{
-    sg_transport_model *tm = sg_calloc_array(models, sizeof *tm);
-    float **ind = sg_calloc_array(models, sizeof *ind);
-    sg_status st = SG_OK;
-    if (!tm || !ind) {
-        st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
-        goto done;
-    }
-    for (size_t m = 0; m < models && st == SG_OK; ++m) {
-        if ((st = nearest_samples(&mw[m], d->gather.normal_cos, d->gather.threads, err)) != SG_OK)
-            break;
-        sg_free(mw[m].indirect);
-        if (!(mw[m].indirect = sg_alloc_array(6 * (mw[m].set.count ? mw[m].set.count : 1), sizeof(float)))) {
-            st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the indirect light");
-            break;
-        }
-        tm[m] = (sg_transport_model){.sites = &mw[m].sites, .nearest = mw[m].nearest, .e0 = mw[m].e0};
-        ind[m] = mw[m].indirect;
-    }
-    if (st == SG_OK)
-        st = sg_transport_solve(w, tm, 0, d->gather.threads, ind, ts, err);
-done:
-    sg_free(tm);
-    sg_free(ind);
-    return st;
-}
-
-/* Marks the samples of `level` to refine: a jump of the visibility ratio
- * on either side (samples.h), or, with the transport estimator, a lit side
- * whose rays see surfaces closer than REFINE_DISTANCE spacings on the
- * harmonic mean (the indirect light varies over that distance; unlit
- * sides, such as the inside of a closed model, are left alone). */
-static sg_status mark_refine(const sg_bake_desc *d, const model_work *mw, uint8_t level, double lit_floor,
-                             uint8_t *mark, sg_error *err)
-{
-    size_t n = mw->set.count;
-    float *v = sg_alloc_array(3 * (n ? n : 1), sizeof *v), *sg = sg_alloc_array(n ? n : 1, sizeof *sg);
-    sg_status st = SG_OK;
-    if (!v || !sg) {
-        st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for refinement");
-        goto done;
-    }
-    for (int side = 0; side < SG_SIDES && st == SG_OK; ++side) {
-        for (size_t j = 0; j < n; ++j) {
-            memcpy(v + 3 * j, mw->sites.ratio + 6 * j + 3 * side, 3 * sizeof *v);
-            sg[j] = mw->sites.sigma[2 * j + (size_t)side];
-        }
-        st = sg_samples_mark_jumps(mw->ps, mw->s0, d->gather.normal_cos, v, sg, REFINE_THRESHOLD, level, &mw->set,
-                                   mark, err);
-    }
-    if (st != SG_OK || d->indirect != SG_BAKE_INDIRECT_TRANSPORT)
-        goto done;
-    float limit = REFINE_DISTANCE * ldexpf(mw->s0, -(int)level);
-    for (size_t j = 0; j < n; ++j) {
-        if (mw->set.level[j] != level || mark[j])
-            continue;
-        for (int side = 0; side < SG_SIDES; ++side) {
-            const float *e0 = mw->e0 + 6 * (size_t)mw->set.splat[j] + 3 * side;
-            const float *D = mw->sites.ratio + 6 * j + 3 * side, *I = mw->indirect + 6 * j + 3 * side;
-            double lit = 0.2126 * (e0[0] * D[0] + I[0]) + 0.7152 * (e0[1] * D[1] + I[1]) +
-                         0.0722 * (e0[2] * D[2] + I[2]);
-            if (lit > lit_floor && mw->sites.dist[2 * j + (size_t)side] < limit)
-                mark[j] = 1;
-        }
-    }
-done:
-    sg_free(v);
-    sg_free(sg);
-    return st;
-}
-
-/* Mean front-side luminance of the light at all sites of every model: the
- * scale below which a side counts as unlit for refinement (1%). */
-static double mean_site_light(const model_work *mw, size_t models)
-{
-    double sum = 0.0;
-    size_t n = 0;
-    for (size_t m = 0; m < models; ++m)
-        for (size_t j = 0; j < mw[m].set.count && mw[m].sampled; ++j) {
-            const float *e0 = mw[m].e0 + 6 * (size_t)mw[m].set.splat[j];
-            const float *D = mw[m].sites.ratio + 6 * j, *I = mw[m].indirect ? mw[m].indirect + 6 * j : NULL;
-            for (int c = 0; c < 3; ++c) {
-                static const double Y[3] = {0.2126, 0.7152, 0.0722};
-                sum += Y[c] * (e0[c] * D[c] + (I ? I[c] : 0.0f));
-            }
-            ++n;
-        }
-    return n ? sum / (double)n : 0.0;
-}
-
-/* Everything after the photon pass (see the top of the file): E must hold
- * the photon estimate (photon estimator) or zeros. */
-static sg_status bake_pipeline(const sg_world *w, const sg_bake_desc *d, sg_bake *b, sg_error *err)
-{
-    size_t models = b->models;
-    int transport = d->indirect == SG_BAKE_INDIRECT_TRANSPORT, direct = d->direct_samples > 0;
-    int threads = d->gather.threads;
-    float cosn = d->gather.normal_cos;
-    model_work *mw = sg_calloc_array(models, sizeof *mw);
-    const sg_irradiance_table *e0 = b->e0;
-    float *vals = NULL, *out = NULL;
-    sg_status st = SG_OK;
-    if (!mw)
-        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
-    double t0 = omp_get_wtime();
-    uint64_t key_base = 0;
-    for (size_t m = 0; m < models; ++m) {
-        model_work *x = &mw[m];
-        x->ps = sg_scene_points(sg_world_scene(w, (uint32_t)m));
-        x->key_base = key_base;
-        key_base += x->ps->count;
-        const sg_material *mat = sg_world_material(w, (uint32_t)m);
-        x->sampled = direct || transport || sg_glossy_material(mat);
-        if (!x->sampled || x->ps->count == 0) {
-            x->sampled = 0;
-            continue;
-        }
-        x->s0 = -1.0f;
-        if (d->sample_spacing >= 0.0f) {
-            float med;
-            if ((st = sg_samples_median_radius(x->ps, &med, err)) != SG_OK)
-                goto done;
-            x->s0 = (d->sample_spacing > 0.0f ? d->sample_spacing : sg_samples_default_spacing(mat)) * med;
-        }
-        if (x->s0 > 0.0f) {
-            if ((st = sg_samples_thin(x->ps, x->s0, cosn, NULL, 0, 0, &x->set, err)) != SG_OK)
-                goto done;
-        } else {
-            if (!(x->set.splat = sg_alloc_array(x->ps->count, sizeof *x->set.splat)) ||
-                !(x->set.level = sg_calloc_array(x->ps->count, sizeof *x->set.level))) {
-                st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu sample points", x->ps->count);
-                goto done;
-            }
-            for (size_t i = 0; i < x->ps->count; ++i)
-                x->set.splat[i] = (uint32_t)i;
-            x->set.count = x->set.capacity = x->ps->count;
-        }
-        if (direct) {
-            if (!(x->e0 = sg_alloc_array(6 * x->ps->count, sizeof *x->e0))) {
-                st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu splats", x->ps->count);
-                goto done;
-            }
-#pragma omp parallel for schedule(static) num_threads(threads > 0 ? threads : omp_get_max_threads())
-            for (size_t i = 0; i < x->ps->count; ++i) {
-                sg_vec3 n = sg_pointset_normal(x->ps, i);
-                sg_vec3 f = sg_irradiance_table_eval(e0, n), k = sg_irradiance_table_eval(e0, sg_v3_scale(n, -1.0f));
-                float *o = x->e0 + 6 * i;
-                o[0] = f.x, o[1] = f.y, o[2] = f.z, o[3] = k.x, o[4] = k.y, o[5] = k.z;
-            }
-        }
-    }
-    sg_transport_desc td = {.env_rays = d->direct_samples, .cos_rays = d->gather_rays,
-                            .seed = d->photons.seed ^ 0xD1EC7ull, .threads = threads};
-    sg_transport_stats ts = {0};
-    if (direct) {
-        for (size_t m = 0; m < models && st == SG_OK; ++m)
-            if (mw[m].sampled)
-                st = sg_transport_gather(w, (uint32_t)m, &mw[m].set, mw[m].key_base, &td, &mw[m].sites, err);
-        for (int level = 0; st == SG_OK && level < d->refine_levels; ++level) {
-            if (transport && (st = solve_indirect(w, d, mw, models, &ts, err)) != SG_OK)
-                break;
-            double floor_lit = 0.01 * mean_site_light(mw, models);
-            size_t added_all = 0;
-            for (size_t m = 0; m < models && st == SG_OK; ++m) {
-                model_work *x = &mw[m];
-                if (!x->sampled || !(x->s0 > 0.0f))
-                    continue;
-                uint8_t *mark = sg_calloc_array(x->set.count ? x->set.count : 1, sizeof *mark);
-                size_t added = 0;
-                if (!mark)
-                    st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for refinement");
-                if (st == SG_OK)
-                    st = mark_refine(d, x, (uint8_t)level, floor_lit, mark, err);
-                if (st == SG_OK)
-                    st = sg_samples_refine_marked(x->ps, x->s0, cosn, mark, (uint8_t)level, &x->set, &added, err);
-                sg_free(mark);
-                if (st == SG_OK && added)
-                    st = sg_transport_gather(w, (uint32_t)m, &x->set, x->key_base, &td, &x->sites, err);
-                added_all += added;
-            }
-            if (added_all == 0)
-                break;
-        }
-        if (st == SG_OK && transport)
-            st = solve_indirect(w, d, mw, models, &ts, err);
-
-        if (st != SG_OK)
-            goto done;
-    }
-    /* Sites to splats: 12 channels per sample, the visibility ratio and the
-     * indirect light of each side; E += E0 * ratio + indirect. */
-    for (size_t m = 0; m < models && direct; ++m) {
-        model_work *x = &mw[m];
-        if (!x->sampled)
-            continue;
-        size_t n = x->set.count, ns = x->ps->count;
-        sg_free(vals);
-        sg_free(out);
-        vals = sg_alloc_array(12 * n, sizeof *vals);
-        out = x->s0 > 0.0f ? sg_alloc_array(12 * ns, sizeof *out) : NULL;
-        if (!vals || (x->s0 > 0.0f && !out)) {
-            st = sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for the interpolation of %zu splats", ns);
-            goto done;
-        }
-        for (size_t j = 0; j < n; ++j) {
-            memcpy(vals + 12 * j, x->sites.ratio + 6 * j, 6 * sizeof *vals);
-            if (x->indirect)
-                memcpy(vals + 12 * j + 6, x->indirect + 6 * j, 6 * sizeof *vals);
-            else
-                memset(vals + 12 * j + 6, 0, 6 * sizeof *vals);
-        }
-        const float *v = vals;
-        if (x->s0 > 0.0f) {
-            if ((st = sg_samples_interpolate_n(x->ps, &x->set, x->s0, SUPPORT, cosn, vals, 12, threads, out, err)) !=
-                SG_OK)
-                goto done;
-            v = out;
-        }
-        float *E = b->E[m];
-        for (size_t i = 0; i < ns; ++i)
-            for (int side = 0; side < SG_SIDES; ++side)
-                for (int c = 0; c < 3; ++c) {
-                    float *o = E + SG_BAKE_SPLAT_FLOATS * i + 6 * side;
-                    float r = v[12 * i + 3 * side + c], ind = o[3 + c] + v[12 * i + 6 + 3 * side + c];
-                    o[c] = isfinite(r) && r > 0.0f ? r : 0.0f; /* invariant 1 */
-                    o[3 + c] = isfinite(ind) && ind > 0.0f ? ind : 0.0f;
-                }
-    }
-    for (size_t m = 0; m < models; ++m) {
-        b->samples[m] = mw[m].sampled ? mw[m].set.count : 0;
-        b->stats.site_hits += mw[m].sites.hits;
-    }
-    b->stats.transport_iterations = ts.iterations;
-    double t1 = omp_get_wtime();
-    /* Glossy bins last: their rays read the finished E of every model. */
-    for (size_t m = 0; m < models; ++m) {
-        model_work *x = &mw[m];
-        const sg_material *mat = sg_world_material(w, (uint32_t)m);
-        int res = sg_glossy_material(mat) ? (d->glossy_res ? d->glossy_res : sg_glossy_default_res(mat)) : 0;
-        if (!res || !x->sampled || x->set.count == 0)
-            continue;
-        if ((st = sg_bake__alloc_glossy(b, (uint32_t)m, res, x->set.count, err)) != SG_OK)
-            goto done;
-        memcpy(b->gsplat[m], x->set.splat, x->set.count * sizeof(uint32_t));
-        if (!x->nearest && (st = nearest_samples(x, cosn, threads, err)) != SG_OK)
-            goto done;
-        memcpy(b->gnear[m], x->nearest, x->ps->count * sizeof(uint32_t));
-        if ((st = sg_glossy_bake(w, b, (uint32_t)m, b->gsplat[m], b->gcount[m], x->key_base, res, d->glossy_rays,
-                                 d->photons.seed ^ 0x6105ull, threads, b->gbins[m], err)) != SG_OK)
-            goto done;
-    }
-    b->stats.direct_seconds = t1 - t0;
-    b->stats.glossy_seconds = omp_get_wtime() - t1;
-done:
-    for (size_t m = 0; m < models; ++m)
-        model_work_free(&mw[m]);
-    sg_free(mw);
-    sg_free(vals);
-    sg_free(out);
-    return st;
-}
-
-static sg_status bake_new_for(const sg_world *w, const sg_bake_desc *d, sg_bake **out, sg_error *err)
-{
-    if (d->glossy_res != 0 && (d->glossy_res < SG_GLOSSY_MIN_RES || d->glossy_res > SG_GLOSSY_MAX_RES))
-        return sg_error_set(err, SG_ERR_INVALID_ARG, "bake: glossy resolution %d is not in %d..%d", d->glossy_res,
-                            SG_GLOSSY_MIN_RES, SG_GLOSSY_MAX_RES);
-    size_t models = sg_world_model_count(w);
-    size_t *counts = sg_alloc_array(models ? models : 1, sizeof *counts);
-    if (!counts)
-        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
-    for (size_t m = 0; m < models; ++m)
-        counts[m] = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
-    sg_status st = sg_bake__new(sg_world_envmap(w), models, counts, d, NULL, out, err);
-    sg_free(counts);
-    return st;
-}
-
 sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *desc, const sg_photon_map *pm,
                                       sg_bake **out, sg_error *err)
 {
@@ -580,62 +265,29 @@ sg_status sg_bake_create_from_photons(const sg_world *w, const sg_bake_desc *des
     if (pm->blocks != nblocks)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "bake: the photon map holds %zu of the pass's %zu blocks",
                             pm->blocks, nblocks);
-    sg_bake *b = NULL;
-    sg_status st = bake_new_for(w, &d, &b, err);
+    sg_bake_job *j = NULL;
+    sg_status st = sg_bake_job_create(w, &d, &j, err);
     if (st != SG_OK)
         return st;
-    double t0 = omp_get_wtime();
-    float **E = NULL;
-    if ((st = sg_irradiance_gather(w, pm, &d.gather, &E, err)) != SG_OK)
-        goto fail;
-    for (size_t m = 0; m < b->models; ++m) { /* the photons' E per side is indirect light */
-        size_t n = b->count[m];
-        for (size_t i = 0; i < n; ++i)
-            for (int side = 0; side < SG_SIDES; ++side)
-                memcpy(b->E[m] + SG_BAKE_SPLAT_FLOATS * i + 6 * side + 3, E[m] + 6 * i + 3 * side, 3 * sizeof(float));
-        sg_free(E[m]);
-    }
-    sg_free(E);
-    if ((st = bake_pipeline(w, &d, b, err)) != SG_OK)
-        goto fail;
-    b->stats.gather_seconds = omp_get_wtime() - t0;
-    b->stats.trace_seconds = pm->seconds;
-    b->stats.photons_shot = pm->shot;
-    b->stats.photon_records = pm->count;
-    b->stats.rays = pm->rays;
-    b->stats.photon_memory_bytes = sg_photon_map_bytes(pm->count);
-    update_memory_stats(b);
-    *out = b;
-    return SG_OK;
-fail:
-    sg_bake_destroy(b);
+    sg_bake_job__borrow_photons(j, pm);
+    if ((st = sg_bake_job_run(j, NULL, NULL, err)) == SG_OK)
+        st = sg_bake_job_finish(j, out, err);
+    sg_bake_job_destroy(j);
     return st;
 }
 
 sg_status sg_bake_create(const sg_world *w, const sg_bake_desc *desc, sg_bake **out, sg_error *err)
 {
     sg_bake_desc d = sg_bake_desc_resolve(desc);
-    if (d.indirect == SG_BAKE_INDIRECT_PHOTONS) {
-        sg_photon_map pm = {0};
-        sg_status st = sg_photons_trace(w, &d.photons, &pm, err);
-        if (st == SG_OK)
-            st = sg_bake_create_from_photons(w, &d, &pm, out, err);
-        sg_photon_map_free(&pm);
-        return st;
-    }
-    sg_bake *b = NULL;
-    sg_status st = bake_new_for(w, &d, &b, err);
+    sg_bake_job *j = NULL;
+    sg_status st = sg_bake_job_create(w, &d, &j, err);
     if (st != SG_OK)
         return st;
-    double t0 = omp_get_wtime();
-    if ((st = bake_pipeline(w, &d, b, err)) != SG_OK) {
-        sg_bake_destroy(b);
-        return st;
-    }
-    b->stats.gather_seconds = omp_get_wtime() - t0;
-    update_memory_stats(b);
-    *out = b;
-    return SG_OK;
+    /* the photon pass's own progress callback and its cancel, as before */
+    if ((st = sg_bake_job_run(j, d.photons.progress ? photon_progress : NULL, &d.photons, err)) == SG_OK)
+        st = sg_bake_job_finish(j, out, err);
+    sg_bake_job_destroy(j);
+    return st;
 }
 
 void sg_bake_destroy(sg_bake *b)

@@ -215,6 +215,12 @@ sg_status sg_bake_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
 sg_status sg_bake__new(const sg_envmap *env, size_t models, const size_t *counts, const sg_bake_desc *d,
                        const sg_bake_stats *s, sg_bake **out, sg_error *err);
 float *sg_bake__light(sg_bake *b, uint32_t m);
+/* For bake_job.c: the bake's table of unshadowed irradiance (the world's
+ * envmap), its figures to fill, and their memory fields to recount. */
+struct sg_irradiance_table;
+const struct sg_irradiance_table *sg_bake__table(const sg_bake *b);
+sg_bake_stats *sg_bake__stats(sg_bake *b);
+void sg_bake__update_memory(sg_bake *b);
 /* For bake_io.c only: model m's sample count, and room for its glossy
  * bins (res per side, count samples); the arrays to fill through
  * sg_bake__glossy. Call before the bake is used; stats follow. */

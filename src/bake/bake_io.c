@@ -22,27 +22,20 @@
 #include <string.h>
 
 #include "bake/bake_file.h"
+#include "bake/bake_io_int.h"
 #include "bake/glossy.h"
 #include "bake/samples.h"
 #include "core/alloc.h"
 
-enum {
-    META_VERSION = 0, META_COUNT, META_SEED, META_MAX_DEPTH, META_RR_DEPTH, META_K, META_NORMAL_COS,
-    META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */,
-    META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */,
-    META_SPACING, META_GLOSSY_RES, META_GLOSSY_RAYS, META_SAMPLES,
-    META_INDIRECT /* sg_bake_indirect */, META_GATHER_RAYS, META_REFINE /* int64; -1 none */
-};
-#define META_LAYOUT 4u
 
 /* CNTS is read straight into the size_t counts sg_bake__new takes. */
 _Static_assert(sizeof(size_t) == sizeof(uint64_t), "bake_io.c assumes a 64-bit size_t");
 
-static const char *const rec_tags[13] = {"PHPX", "PHPY", "PHPZ", "PHNX", "PHNY", "PHNZ", "PHWX",
+const char *const sg_bake_io__photon_tags[13] = {"PHPX", "PHPY", "PHPZ", "PHNX", "PHNY", "PHNZ", "PHWX",
                                          "PHWY", "PHWZ", "PHFR", "PHFG", "PHFB", "PHMD"};
 
-static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, size_t blocks, size_t shot,
-                     size_t records, size_t models, size_t splats, size_t samples, const sg_ray_stats *rays)
+void sg_bake_io__put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, size_t blocks, size_t shot,
+                          size_t records, size_t models, size_t splats, size_t samples, const sg_ray_stats *rays)
 {
     uint32_t cos_bits;
     memcpy(&cos_bits, &d->gather.normal_cos, sizeof cos_bits);
@@ -74,15 +67,18 @@ static void put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc *d, s
     meta[META_REFINE] = (uint64_t)(int64_t)d->refine_levels;
 }
 
-static void describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
+void sg_bake_io__describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
 {
-    snprintf(buf, size, "photons %zu, seed %" PRIu64 ", max depth %d, rr depth %d, k %u, normal_cos %g, block %" PRIu64,
-             d->photons.count, d->photons.seed, d->photons.max_depth, d->photons.rr_depth, d->gather.k,
-             (double)d->gather.normal_cos, block);
+    snprintf(buf, size,
+             "%s, seed %" PRIu64 ", %d + %d rays per site, spacing %g, %d refinements, photons %zu, max depth %d, "
+             "rr depth %d, k %u, normal_cos %g, block %" PRIu64,
+             d->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", d->photons.seed, d->direct_samples,
+             d->gather_rays, (double)d->sample_spacing, d->refine_levels, d->photons.count, d->photons.max_depth,
+             d->photons.rr_depth, d->gather.k, (double)d->gather.normal_cos, block);
 }
 
 /* Reads and checks META (invariant 2, 3); *d gets the parameters. */
-static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t meta[SG_BAKE_META_COUNT],
+sg_status sg_bake_io__read_meta(const sg_bake_file *f, const char *path, uint64_t meta[SG_BAKE_META_COUNT],
                            sg_bake_desc *d, sg_error *err)
 {
     const sg_bake_section *s = sg_bake_file_find(f, "META");
@@ -162,7 +158,7 @@ static sg_status read_meta(const sg_bake_file *f, const char *path, uint64_t met
 }
 
 /* What is wrong with an irradiance or flux value, or NULL. */
-static const char *not_finite_or_negative(float v)
+const char *sg_bake_io__bad_value(float v)
 {
     if (isnan(v))
         return "NaN";
@@ -182,7 +178,7 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
     sg_bake_stats stats;
     sg_bake_get_stats(b, &stats);
     uint64_t meta[SG_BAKE_META_COUNT];
-    put_meta(meta, &d, sg_photon_block_count(&d.photons), stats.photons_shot, stats.photon_records, models,
+    sg_bake_io__put_meta(meta, &d, sg_photon_block_count(&d.photons), stats.photons_shot, stats.photon_records, models,
              stats.splats, stats.sample_points, &stats.rays);
     uint64_t *counts = sg_alloc_array(3 * models, sizeof *counts);
     if (!counts)
@@ -251,7 +247,7 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
 }
 
 /* A U64 section of n values (SCNT, GRES): one per model. */
-static sg_status read_u64s(const sg_bake_file *f, const char *path, const char *tag, size_t n, uint64_t *out,
+sg_status sg_bake_io__read_u64s(const sg_bake_file *f, const char *path, const char *tag, size_t n, uint64_t *out,
                            sg_error *err)
 {
     const sg_bake_section *s = sg_bake_file_find(f, tag);
@@ -327,7 +323,7 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
     }
     uint64_t meta[SG_BAKE_META_COUNT];
     sg_bake_desc d;
-    if ((st = read_meta(f, path, meta, &d, err)) != SG_OK)
+    if ((st = sg_bake_io__read_meta(f, path, meta, &d, err)) != SG_OK)
         goto done;
     size_t models = sg_world_model_count(w);
     const sg_bake_section *cs = sg_bake_file_find(f, "CNTS");
@@ -381,7 +377,7 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
         if ((st = sg_bake_file_read(f, tag, E, s->size, err)) != SG_OK)
             goto done;
         for (size_t i = 0; i < SG_BAKE_SPLAT_FLOATS * counts[m]; ++i) {
-            const char *what = not_finite_or_negative(E[i]);
+            const char *what = sg_bake_io__bad_value(E[i]);
             if (what) {
                 size_t k = i % SG_BAKE_SPLAT_FLOATS;
                 st = sg_error_set(err, SG_ERR_CORRUPT, "%s: model %zu, splat %zu: %s %s is %s (%g)", path, m,
@@ -396,8 +392,8 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
         st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", path);
         goto done;
     }
-    if ((st = read_u64s(f, path, "SCNT", models, per, err)) != SG_OK ||
-        (st = read_u64s(f, path, "GRES", models, per + models, err)) != SG_OK)
+    if ((st = sg_bake_io__read_u64s(f, path, "SCNT", models, per, err)) != SG_OK ||
+        (st = sg_bake_io__read_u64s(f, path, "GRES", models, per + models, err)) != SG_OK)
         goto free_per;
     uint64_t samples = 0;
     for (size_t m = 0; m < models && st == SG_OK; ++m) {
@@ -426,119 +422,6 @@ free_per:
 done:
     sg_bake_destroy(b);
     sg_free(counts);
-    sg_bake_file_close(f);
-    return st;
-}
-
-sg_status sg_bake_checkpoint_save(const char *path, const sg_bake_desc *desc, const sg_photon_map *m,
-                                  uint64_t scene_hash, sg_error *err)
-{
-    assert(path && m);
-    sg_bake_desc d = sg_bake_desc_resolve(desc);
-    uint64_t meta[SG_BAKE_META_COUNT];
-    put_meta(meta, &d, m->blocks, m->shot, m->count, 0, 0, 0, &m->rays);
-    const void *arrays[13] = {m->px, m->py, m->pz, m->nx, m->ny, m->nz, m->wx,
-                              m->wy, m->wz, m->fr, m->fg, m->fb, m->model};
-    sg_bake_writer *w = NULL;
-    sg_bake_writer_desc wd = {.path = path, .scene_hash = scene_hash, .param_hash = sg_bake_param_hash(&d),
-                              .flags = SG_BAKE_FLAG_CHECKPOINT, .max_sections = 14};
-    sg_status st = sg_bake_writer_create(&wd, &w, err);
-    if (st == SG_OK)
-        st = sg_bake_writer_add_section(w, "META", SG_BAKE_TYPE_U64, SG_BAKE_META_COUNT, meta, err);
-    for (int a = 0; a < 13 && st == SG_OK; ++a)
-        st = sg_bake_writer_add_section(w, rec_tags[a], a < 12 ? SG_BAKE_TYPE_F32 : SG_BAKE_TYPE_U32, m->count,
-                                        m->count ? arrays[a] : NULL, err);
-    if (st == SG_OK)
-        st = sg_bake_writer_commit(w, err);
-    sg_bake_writer_destroy(w);
-    return st;
-}
-
-sg_status sg_bake_checkpoint_load(const char *path, const sg_world *w, const sg_bake_desc *desc, uint64_t scene_hash,
-                                  sg_photon_map *out, sg_error *err)
-{
-    assert(path && w && out);
-    sg_bake_desc want = sg_bake_desc_resolve(desc);
-    sg_bake_file *f = NULL;
-    sg_photon_map m = {0};
-    sg_status st = sg_bake_file_open(path, scene_hash, 0, &f, err);
-    if (st != SG_OK)
-        return st;
-    if (!(sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT)) {
-        st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: a finished bake, not a checkpoint", path);
-        goto done;
-    }
-    uint64_t meta[SG_BAKE_META_COUNT];
-    sg_bake_desc d;
-    if ((st = read_meta(f, path, meta, &d, err)) != SG_OK)
-        goto done;
-    if (sg_bake_param_hash(&d) != sg_bake_param_hash(&want)) {
-        char had[200], asked[200];
-        describe(&d, meta[META_BLOCK], had, sizeof had);
-        describe(&want, SG_PHOTON_BLOCK, asked, sizeof asked);
-        st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: made with other bake parameters (%s) than these (%s)", path,
-                          had, asked);
-        goto done;
-    }
-    uint64_t nblocks = sg_photon_block_count(&d.photons), blocks = meta[META_BLOCKS];
-    uint64_t shot = blocks * SG_PHOTON_BLOCK < d.photons.count ? blocks * SG_PHOTON_BLOCK : d.photons.count;
-    if (blocks > nblocks || meta[META_SHOT] != shot || meta[META_MODELS] != 0 || meta[META_SPLATS] != 0) {
-        st = sg_error_set(err, SG_ERR_CORRUPT,
-                          "%s: section META: %" PRIu64 " of %" PRIu64 " blocks done and %" PRIu64
-                          " photons shot do not fit a checkpoint",
-                          path, blocks, nblocks, meta[META_SHOT]);
-        goto done;
-    }
-    uint64_t R = meta[META_RECORDS];
-    for (int a = 0; a < 13; ++a) {
-        const sg_bake_section *s = sg_bake_file_find(f, rec_tags[a]);
-        if (!s || s->type != (a < 12 ? SG_BAKE_TYPE_F32 : SG_BAKE_TYPE_U32) || s->count != R) {
-            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s is %s (META says %" PRIu64 " records)", path,
-                              rec_tags[a], s ? "of the wrong type or length" : "missing", R);
-            goto done;
-        }
-    }
-    /* R is bounded by the file size now (bake_file.h checked each section). */
-    float **arrays[12] = {&m.px, &m.py, &m.pz, &m.nx, &m.ny, &m.nz, &m.wx, &m.wy, &m.wz, &m.fr, &m.fg, &m.fb};
-    for (int a = 0; a < 12; ++a)
-        if (!(*arrays[a] = sg_alloc_array((size_t)R, sizeof(float)))) {
-            st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %" PRIu64 " photon records", path, R);
-            goto done;
-        }
-    if (!(m.model = sg_alloc_array((size_t)R, sizeof(uint32_t)))) {
-        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %" PRIu64 " photon records", path, R);
-        goto done;
-    }
-    for (int a = 0; a < 13; ++a) {
-        void *dst = a < 12 ? (void *)*arrays[a] : (void *)m.model;
-        if ((st = sg_bake_file_read(f, rec_tags[a], dst, R * 4, err)) != SG_OK)
-            goto done;
-    }
-    size_t models = sg_world_model_count(w);
-    for (size_t j = 0; j < R; ++j) {
-        const char *what = NULL;
-        for (int a = 0; a < 9 && !what; ++a)
-            if (!isfinite((*arrays[a])[j]))
-                what = "a position, normal or direction is not finite";
-        for (int a = 9; a < 12 && !what; ++a)
-            if (not_finite_or_negative((*arrays[a])[j]))
-                what = "its flux is not finite and >= 0";
-        if (!what && m.model[j] >= models)
-            what = "its model is not in the scene";
-        if (what) {
-            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: photon record %zu: %s", path, j, what);
-            goto done;
-        }
-    }
-    m.count = m.capacity = (size_t)R;
-    m.blocks = (size_t)blocks;
-    m.shot = (size_t)shot;
-    m.rays = (sg_ray_stats){meta[META_RAYS], meta[META_RAYS + 1], meta[META_RAYS + 2],
-                            meta[META_RAYS + 3], meta[META_RAYS + 4], meta[META_RAYS + 5]};
-    *out = m;
-    memset(&m, 0, sizeof m);
-done:
-    sg_photon_map_free(&m);
     sg_bake_file_close(f);
     return st;
 }

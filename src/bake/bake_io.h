@@ -1,7 +1,7 @@
-/* bake_io.h — bakes and photon checkpoints in .sgbake files.
+/* bake_io.h — bakes and bake checkpoints (stopped bake jobs) in .sgbake files.
  *
- * What it does: writes a finished bake (sg_bake_save) or the photon records
- * of an unfinished one (sg_bake_checkpoint_save) into the .sgbake container
+ * What it does: writes a finished bake (sg_bake_save) or the state of a
+ * stopped bake job (sg_bake_job_save: a checkpoint) into the .sgbake container
  * (bake/bake_file.h: checksummed sections, written to a temporary file and
  * renamed into place, so a crash or Ctrl-C never leaves half a file), and
  * reads them back with every value checked against the world it is for.
@@ -33,19 +33,39 @@
  *   Gmmm  F16 x 3 P R^2  the bins, sample point by sample point, bin
  *                   (i, j) at 3 (j R + i), RGB (bake/glossy.h), finite >= 0
  *   (a file holds at most SG_BAKE_MAX_SECTIONS sections in all)
- * Sections of a checkpoint (flags SG_BAKE_FLAG_CHECKPOINT):
- *   META  U64 x 28  as for a bake; [8] says which blocks are done: the
- *                   records are those of blocks [0, META[8]) exactly
+ * Sections of a checkpoint (flags SG_BAKE_FLAG_CHECKPOINT), a stopped bake
+ * job (bake_job.h; mmm the model index in 3 hex digits as above):
+ *   META  U64 x 28  as for a bake; in stage PHOTONS [8] says which photon
+ *                   blocks are done: the records are those of blocks
+ *                   [0, META[8]) exactly
+ *   JOBS  U64 x (4 + 3 M)  stage (sg_bake_stage), refinement level being
+ *                   traced, level-0 samples made (0/1), M; then per model:
+ *                   sample points, sample points whose sites are traced,
+ *                   sample points whose glossy bins are final
+ *   stage PHOTONS:
  *   PHPX PHPY PHPZ  F32 x R each: record positions (world space)
  *   PHNX PHNY PHNZ  F32 x R: normals
  *   PHWX PHWY PHWZ  F32 x R: incoming directions
  *   PHFR PHFG PHFB  F32 x R: flux, RGB
  *   PHMD            U32 x R: model index
+ *   stages SITES and GLOSSY, per model mmm:
+ *   Emmm  F32 x 12n the light per splat so far (the photon estimate or 0
+ *                   in SITES; final in GLOSSY)
+ *   Smmm, Lmmm  U32, U8 x P  each sample point's splat and level (once the
+ *                   level-0 samples are made)
+ *   stage SITES, G = the traced sample points:
+ *   Rmmm, Ummm  F32 x 6G   visibility ratio, unshadowed irradiance per site
+ *   Qmmm, Dmmm  F32 x 2G   ratio's standard error, harmonic mean distance
+ *   Fmmm  U64 x (2G + 1)  hits of site i: [F[i], F[i+1])
+ *   Hmmm, Mmmm, Kmmm  U32, U32, F32 x F[2G]  each hit's splat, model << 1 |
+ *                   side, weight (transport.h)
+ *   stage GLOSSY:
+ *   Gmmm  F16 x 3 R^2 D  the final bins of the first D sample points
  * META, element i (u64; floats as their bits in the low 32 bits):
  *    0 layout version, 4         8 photon blocks done
  *    1 photon count              9 photons shot (those of the done blocks)
  *    2 seed                     10 photon records R
- *    3 max depth                11 models (0 in a checkpoint)
+ *    3 max depth                11 models
  *    4 Russian roulette depth   12 splats, all models (0 in a checkpoint)
  *    5 k                        13..18 ray stats: rays, nodes, leaves,
  *    6 normal_cos (f32 bits)           isects, splats, hits
@@ -94,6 +114,7 @@
 #include <stdint.h>
 
 #include "bake/bake.h"
+#include "bake/bake_job.h"
 #include "bake/photons.h"
 #include "core/error.h"
 #include "render/world.h"
@@ -109,16 +130,16 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
  * *out: release with sg_bake_destroy. */
 sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash, sg_bake **out, sg_error *err);
 
-/* Writes the records of m (blocks [0, m->blocks) of the pass of d) to path
- * atomically, flagged SG_BAKE_FLAG_CHECKPOINT. */
-sg_status sg_bake_checkpoint_save(const char *path, const sg_bake_desc *d, const sg_photon_map *m,
-                                  uint64_t scene_hash, sg_error *err);
+/* Writes job j (bake_job.h), stopped or not yet run, to path atomically,
+ * flagged SG_BAKE_FLAG_CHECKPOINT (sections above). */
+sg_status sg_bake_job_save(const sg_bake_job *j, const char *path, uint64_t scene_hash, sg_error *err);
 
-/* Reads a checkpoint made for scene_hash and the parameters of d into *out
- * (a map to extend with sg_photons_trace_more; free it with
- * sg_photon_map_free). Checks every record: finite, flux >= 0, model < the
- * world's model count. seconds is 0 (time is not stored). */
-sg_status sg_bake_checkpoint_load(const char *path, const sg_world *w, const sg_bake_desc *d, uint64_t scene_hash,
-                                  sg_photon_map *out, sg_error *err);
+/* Reads a checkpoint made for scene_hash and the parameters of d (else
+ * SG_ERR_INVALID_ARG naming both parameter sets) into a job for world w, to
+ * be run on: the bake it ends in is the same, bit for bit, as a job run
+ * straight through. Every value is checked (SG_ERR_CORRUPT naming the
+ * section, model and element). *out: release with sg_bake_job_destroy. */
+sg_status sg_bake_job_load(const char *path, const sg_world *w, const sg_bake_desc *d, uint64_t scene_hash,
+                           sg_bake_job **out, sg_error *err);
 
 #endif

@@ -52,7 +52,8 @@ typedef int (*sg_photon_progress_fn)(void *user, size_t done_photons, size_t tot
 enum sg_photon_flags {
     /* Record only where a photon lands after at least one bounce: the
      * indirect light, when the direct light is computed another way
-     * (bake/direct.h). The photon is still traced from the envmap. */
+     * (the sample sites, bake/transport.h). The photon is still traced
+     * from the envmap. */
     SG_PHOTONS_INDIRECT_ONLY = 1u << 0
 };
 

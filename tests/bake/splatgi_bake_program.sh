@@ -2,7 +2,8 @@
 # splatgi_bake_program.sh — runs the splatgi-bake program end to end on a
 # small scene: a bake, a frame rendered from it (splatgi-render --bake),
 # the error paths (a bake for another scene, --resume with nothing to
-# resume), and Ctrl-C: SIGINT while tracing must leave OUT.ckpt and exit
+# resume), and Ctrl-C: SIGINT while the sample sites' rays are traced (and,
+# with --indirect photons, while photons are) must leave OUT.ckpt and exit
 # 130, --resume must finish it, remove the checkpoint and write the same
 # bytes (cmp) as a run straight through.
 # usage: splatgi_bake_program.sh SPLATGI_BAKE SPLATGI_RENDER WORKDIR
@@ -24,10 +25,10 @@ JSON
 sed 's/"sky"/"studio"/' scene.json > other.json
 
 # 1. A bake, and a frame from it.
-"$BAKE" scene.json -o a.sgbake --photons 100000 --k 32 --threads 2 > a.log 2>&1 || { cat a.log; fail "bake"; }
+"$BAKE" scene.json -o a.sgbake --direct 16 --gather-rays 32 --threads 2 > a.log 2>&1 || { cat a.log; fail "bake"; }
 [ -s a.sgbake ] || fail "no a.sgbake"
 [ ! -e a.sgbake.ckpt ] || fail "a checkpoint was left after a finished bake"
-grep -q "photon records" a.log || { cat a.log; fail "no memory report"; }
+grep -q "bake memory" a.log || { cat a.log; fail "no memory report"; }
 "$RENDER" --scene scene.json --bake a.sgbake --camera main --out a.png > r.log 2>&1 || { cat r.log; fail "render"; }
 [ -s a.png ] || fail "no a.png"
 grep -q "frame" r.log || fail "no frame time"
@@ -41,29 +42,36 @@ grep -q "^splatgi-bake: none.sgbake.ckpt: no checkpoint to resume" n.log || { ca
 "$BAKE" scene.json --photons 0 > z.log 2>&1 && fail "--photons 0 accepted"
 grep -q "^splatgi-bake: --photons: '0' is not an integer" z.log || { cat z.log; fail "message"; }
 
-# 3. Ctrl-C and --resume against a run straight through.
-N=1500000
-"$BAKE" scene.json -o full.sgbake --photons $N --threads 2 > full.log 2>&1 || { cat full.log; fail "full bake"; }
-"$BAKE" scene.json -o cut.sgbake --photons $N --threads 2 > cut.log 2>&1 &
-pid=$!
-i=0
-until grep -q "blocks of" cut.log 2>/dev/null; do   # tracing has begun
-    i=$((i + 1)); [ $i -lt 600 ] || fail "the bake never started tracing"; sleep 0.05
-done
-sleep 0.3
-kill -INT $pid
-wait $pid
-rc=$?
-if [ $rc -eq 0 ]; then echo "the bake finished before SIGINT; resume not checked"; exit 77; fi
-[ $rc -eq 130 ] || { cat cut.log; fail "interrupted bake exited $rc, expected 130"; }
-[ -s cut.sgbake.ckpt ] || fail "no checkpoint"
-[ ! -e cut.sgbake ] || fail "an interrupted bake wrote its output"
-grep -q "to resume: .* --resume" cut.log || { cat cut.log; fail "no resume hint"; }
-"$BAKE" scene.json -o cut.sgbake --photons 999 --threads 2 --resume > bad.log 2>&1 && fail "resumed with other options"
-grep -q "made with other bake parameters" bad.log || { cat bad.log; fail "message for other options"; }
-"$BAKE" scene.json -o cut.sgbake --photons $N --threads 1 --resume > res.log 2>&1 || { cat res.log; fail "resume"; }
-grep -q "resuming after" res.log || { cat res.log; fail "did not resume"; }
-[ ! -e cut.sgbake.ckpt ] || fail "the checkpoint was left after the resumed bake"
-cmp full.sgbake cut.sgbake || fail "resumed bake differs from the one straight through"
-grep "interrupted after" cut.log
+# 3. Ctrl-C and --resume against a run straight through, for each
+#    estimator: $1 options, $2 the line that says the work has begun.
+interrupt_and_resume() {
+    opts=$1 tag=$2
+    rm -f full.sgbake cut.sgbake cut.sgbake.ckpt
+    "$BAKE" scene.json -o full.sgbake $opts --threads 2 > full.log 2>&1 || { cat full.log; fail "full bake ($tag)"; }
+    "$BAKE" scene.json -o cut.sgbake $opts --threads 2 > cut.log 2>&1 &
+    pid=$!
+    i=0
+    until grep -q "estimator:" cut.log 2>/dev/null; do   # the job has begun
+        i=$((i + 1)); [ $i -lt 600 ] || fail "the bake never started ($tag)"; sleep 0.05
+    done
+    sleep 0.4
+    kill -INT $pid
+    wait $pid
+    rc=$?
+    if [ $rc -eq 0 ]; then echo "the bake finished before SIGINT; resume not checked ($tag)"; exit 77; fi
+    [ $rc -eq 130 ] || { cat cut.log; fail "interrupted bake exited $rc, expected 130 ($tag)"; }
+    [ -s cut.sgbake.ckpt ] || fail "no checkpoint ($tag)"
+    [ ! -e cut.sgbake ] || fail "an interrupted bake wrote its output ($tag)"
+    grep -q "to resume: .* --resume" cut.log || { cat cut.log; fail "no resume hint ($tag)"; }
+    "$BAKE" scene.json -o cut.sgbake $opts --seed 99 --threads 2 --resume > bad.log 2>&1 &&
+        fail "resumed with other options ($tag)"
+    grep -q "made with other bake parameters" bad.log || { cat bad.log; fail "message for other options ($tag)"; }
+    "$BAKE" scene.json -o cut.sgbake $opts --threads 1 --resume > res.log 2>&1 || { cat res.log; fail "resume ($tag)"; }
+    grep -q "resuming from" res.log || { cat res.log; fail "did not resume ($tag)"; }
+    [ ! -e cut.sgbake.ckpt ] || fail "the checkpoint was left after the resumed bake ($tag)"
+    cmp full.sgbake cut.sgbake || fail "resumed bake differs from the one straight through ($tag)"
+    grep "interrupted at" cut.log
+}
+interrupt_and_resume "--direct 256 --gather-rays 512 --refine 1" "transport"
+interrupt_and_resume "--indirect photons --photons 1500000" "photons"
 echo "ok"

@@ -4,9 +4,10 @@
  *  2. a bake for another scene, a truncated or corrupted file, a model or
  *     splat count that differs from the world, a NaN irradiance, a
  *     checkpoint given as a bake: each a clean error naming the file;
- *  3. resume: blocks [0, n/2), checkpoint written and read, then [n/2, n)
- *     equals the one-pass records bit for bit (also across thread counts),
- *     and the two bake files are the same bytes;
+ *  3. resume: photon blocks traced in parts equal one pass bit for bit;
+ *     a bake job stopped anywhere (every stage, each estimator), saved,
+ *     loaded and finished on another thread count writes the same bytes as
+ *     one run straight through;
  *  4. the progress callback is called, counts up to the total, and a
  *     nonzero return cancels with the completed prefix kept;
  *  5. glossy bakes: bins, sample points and the new parameters round trip;
@@ -22,6 +23,7 @@
 #include "bake/bake.h"
 #include "bake/bake_file.h"
 #include "bake/bake_io.h"
+#include "bake/bake_job.h"
 #include "core/alloc.h"
 #include "render/world.h"
 
@@ -458,10 +460,9 @@ static void test_bake_io_glossy_corrupt(void **state)
     sg_world_destroy(w);
 }
 
-/* 3. Blocks [0, n/2) on 1 thread, a checkpoint written and read back,
- * blocks [n/2, n) on 2 threads: the records equal the one-pass map bit for
- * bit, and the finished bake files are the same bytes. */
-static void test_bake_io_resume_equals_one_pass(void **state)
+/* 3a. Photon blocks [0, n/2) on 1 thread and then [n/2, n) on 2 threads
+ * equal the one-pass map bit for bit, and make the same bake file. */
+static void test_bake_io_photons_in_parts_equal_one_pass(void **state)
 {
     (void)state;
     sg_world *w = small_world(4000);
@@ -469,34 +470,25 @@ static void test_bake_io_resume_equals_one_pass(void **state)
     size_t nb = sg_photon_block_count(&d.photons);
     assert_int_equal(nb, 25);
     sg_error err = {0};
-    sg_photon_map one = {0}, half = {0}, resumed = {0};
+    sg_photon_map one = {0}, parts = {0};
     d.photons.threads = 2;
     assert_int_equal(sg_photons_trace(w, &d.photons, &one, &err), SG_OK);
     assert_int_equal(one.blocks, nb);
     assert_int_equal(one.shot, 100000);
-
     d.photons.threads = 1;
-    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb / 2, &half, &err), SG_OK);
-    assert_int_equal(half.blocks, nb / 2);
-    assert_int_equal(half.shot, (nb / 2) * SG_PHOTON_BLOCK);
-    const char *ckpt = tmp_path("resume.sgbake.ckpt");
-    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &half, SCENE_HASH, &err), SG_OK);
-    sg_photon_map_free(&half);
-    if (sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH, &resumed, &err) != SG_OK)
-        fail_msg("checkpoint: %s", err.message);
-    assert_int_equal(resumed.blocks, nb / 2);
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb / 2, &parts, &err), SG_OK);
+    assert_int_equal(parts.blocks, nb / 2);
+    assert_int_equal(parts.shot, (nb / 2) * SG_PHOTON_BLOCK);
     d.photons.threads = 2;
-    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb, &resumed, &err), SG_OK);
-    assert_maps_equal(&one, &resumed);
-
+    assert_int_equal(sg_photons_trace_more(w, &d.photons, nb, &parts, &err), SG_OK);
+    assert_maps_equal(&one, &parts);
     sg_bake *b1 = NULL, *b2 = NULL;
     assert_int_equal(sg_bake_create_from_photons(w, &d, &one, &b1, &err), SG_OK);
-    assert_int_equal(sg_bake_create_from_photons(w, &d, &resumed, &b2, &err), SG_OK);
+    assert_int_equal(sg_bake_create_from_photons(w, &d, &parts, &b2, &err), SG_OK);
     const char *p1 = tmp_path("one.sgbake");
     assert_int_equal(sg_bake_save(b1, p1, SCENE_HASH, &err), SG_OK);
-    assert_saves_as(b2, "resumed.sgbake", p1);
-    /* and sg_bake_create (one call) makes the same bake again */
-    sg_bake *b3 = make_bake(w, 100000);
+    assert_saves_as(b2, "parts.sgbake", p1);
+    sg_bake *b3 = make_bake(w, 100000); /* sg_bake_create, one call */
     assert_saves_as(b3, "create.sgbake", p1);
     /* an incomplete map does not make a bake */
     sg_photon_map part = {0};
@@ -509,63 +501,210 @@ static void test_bake_io_resume_equals_one_pass(void **state)
     sg_bake_destroy(b2);
     sg_bake_destroy(b3);
     sg_photon_map_free(&one);
-    sg_photon_map_free(&resumed);
+    sg_photon_map_free(&parts);
     sg_world_destroy(w);
 }
 
+/* A job's progress calls: where each was, and a stop on call `stop_at`. */
+typedef struct job_calls {
+    int n, stop_at;
+    sg_bake_progress at[4096];
+} job_calls;
+
+static int on_job_progress(void *user, const sg_bake_progress *p)
+{
+    job_calls *c = user;
+    if (c->n < 4096)
+        c->at[c->n] = *p;
+    c->n++;
+    return c->stop_at && c->n >= c->stop_at;
+}
+
+/* A glossy sphere on the ground, so that every stage has work: photons
+ * (with the photon estimator), three levels of sample sites, glossy bins. */
+static sg_world *job_world(void)
+{
+    return sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,"
+                                   "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"type\":\"ggx\","
+                                   "\"roughness\":0.5,\"specular\":0.3}},{\"builtin\":\"ground\",\"points\":3000}],"
+                                   "\"envmap\":{\"builtin\":\"sunsky\"}}");
+}
+
+/* 3b. A job stopped at progress call k, saved, loaded and run to the end
+ * on another thread count writes the same bake file as one run straight
+ * through: for each estimator, at the first call of every stage and level
+ * and in the middle of the longest ones. */
+static void check_resume_everywhere(sg_bake_indirect indirect)
+{
+    sg_world *w = job_world();
+    sg_bake_desc d = {.indirect = indirect, .photons = {.count = 40000, .seed = 3, .progress_seconds = -1.0},
+                      .gather = {.k = 32}, .direct_samples = 8, .gather_rays = 8, .glossy_rays = 16};
+    sg_error err = {0};
+    sg_bake_job *j = NULL;
+    job_calls *all = test_calloc(1, sizeof *all), *c = test_calloc(1, sizeof *c);
+    assert_int_equal(sg_bake_job_create(w, &d, &j, &err), SG_OK);
+    assert_int_equal(sg_bake_job_run(j, on_job_progress, all, &err), SG_OK);
+    sg_bake *whole = NULL;
+    assert_int_equal(sg_bake_job_finish(j, &whole, &err), SG_OK);
+    sg_bake_job_destroy(j);
+    const char *ref = tmp_path("whole.sgbake");
+    assert_int_equal(sg_bake_save(whole, ref, SCENE_HASH, &err), SG_OK);
+    sg_bake_destroy(whole);
+    assert_true(all->n > 8 && all->n < 4096);
+    int stages[SG_BAKE_STAGE_DONE] = {0};
+    for (int k = 1; k <= all->n; ++k) {
+        const sg_bake_progress *p = &all->at[k - 1], *q = k > 1 ? &all->at[k - 2] : NULL;
+        stages[p->stage] = 1;
+        int first = !q || q->stage != p->stage || q->level != p->level;
+        if (!first && k != all->n / 2 && k != all->n - 1)
+            continue;
+        memset(c, 0, sizeof *c);
+        c->stop_at = k;
+        assert_int_equal(sg_bake_job_create(w, &d, &j, &err), SG_OK);
+        sg_status st = sg_bake_job_run(j, on_job_progress, c, &err);
+        if (st == SG_OK) { /* the last call came after the last block */
+            sg_bake_job_destroy(j);
+            continue;
+        }
+        assert_int_equal(st, SG_ERR_CANCELLED);
+        const char *ckpt = tmp_path("job.ckpt");
+        if (sg_bake_job_save(j, ckpt, SCENE_HASH, &err) != SG_OK)
+            fail_msg("save at call %d (stage %d, level %d): %s", k, (int)p->stage, p->level, err.message);
+        sg_bake_job_destroy(j);
+        j = NULL;
+        sg_bake_desc d2 = d;
+        d2.gather.threads = d2.photons.threads = k % 2 ? 1 : 2;
+        if (sg_bake_job_load(ckpt, w, &d2, SCENE_HASH, &j, &err) != SG_OK)
+            fail_msg("load at call %d (stage %d, level %d): %s", k, (int)p->stage, p->level, err.message);
+        assert_int_equal(sg_bake_job_run(j, NULL, NULL, &err), SG_OK);
+        sg_bake *b = NULL;
+        assert_int_equal(sg_bake_job_finish(j, &b, &err), SG_OK);
+        sg_bake_job_destroy(j);
+        char name[64];
+        snprintf(name, sizeof name, "resumed_%d.sgbake", k);
+        assert_saves_as(b, name, ref);
+        sg_bake_destroy(b);
+    }
+    assert_true(stages[SG_BAKE_STAGE_SITES] && stages[SG_BAKE_STAGE_GLOSSY]);
+    assert_true(stages[SG_BAKE_STAGE_PHOTONS] == (indirect == SG_BAKE_INDIRECT_PHOTONS));
+    test_free(all);
+    test_free(c);
+    sg_world_destroy(w);
+}
+
+static void test_bake_job_resume_transport(void **state)
+{
+    (void)state;
+    check_resume_everywhere(SG_BAKE_INDIRECT_TRANSPORT);
+}
+
+static void test_bake_job_resume_photons(void **state)
+{
+    (void)state;
+    check_resume_everywhere(SG_BAKE_INDIRECT_PHOTONS);
+}
+
+/* A job stopped in the stage `stage` (at the call after its first one), saved. */
+static void save_stopped(const sg_world *w, const sg_bake_desc *d, sg_bake_stage stage, const char *path)
+{
+    sg_bake_job *j = NULL;
+    job_calls *c = test_calloc(1, sizeof *c);
+    assert_int_equal(sg_bake_job_create(w, d, &j, NULL), SG_OK);
+    for (int k = 1, seen = 0;; ++k) {
+        memset(c, 0, sizeof *c);
+        c->stop_at = k;
+        sg_bake_job_destroy(j);
+        assert_int_equal(sg_bake_job_create(w, d, &j, NULL), SG_OK);
+        assert_int_equal(sg_bake_job_run(j, on_job_progress, c, NULL), SG_ERR_CANCELLED);
+        if (sg_bake_job_progress(j).stage == stage && ++seen == 2)
+            break;
+    }
+    assert_int_equal(sg_bake_job_save(j, path, SCENE_HASH, NULL), SG_OK);
+    sg_bake_job_destroy(j);
+    test_free(c);
+}
+
 /* 2. A checkpoint read with other parameters, for another scene, as a
- * bake, or damaged: clean errors; a bake read as a checkpoint too. */
+ * bake, or damaged: clean errors naming the file and what is wrong; a bake
+ * read as a checkpoint too; a job saved before any work loads and runs. */
 static void test_bake_io_checkpoint_checks(void **state)
 {
     (void)state;
-    sg_world *w = small_world(2000);
-    sg_bake_desc d = bake_desc(20000);
+    sg_world *w = job_world();
+    sg_bake_desc d = {.indirect = SG_BAKE_INDIRECT_PHOTONS, .photons = {.count = 40000, .seed = 7,
+                      .progress_seconds = -1.0}, .direct_samples = 8, .gather_rays = 8, .glossy_rays = 16};
     sg_error err = {0};
-    sg_photon_map m = {0}, out = {0};
-    assert_int_equal(sg_photons_trace_more(w, &d.photons, 2, &m, &err), SG_OK);
-    const char *ckpt = tmp_path("checks.ckpt");
-    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &m, SCENE_HASH, &err), SG_OK);
+    sg_bake_job *out = NULL;
+    const char *ckpt = tmp_path("checks.ckpt"), *sites = tmp_path("sites.ckpt"), *gl = tmp_path("glossy.ckpt");
+    save_stopped(w, &d, SG_BAKE_STAGE_PHOTONS, ckpt);
     sg_bake_desc other = d;
     other.photons.seed = 8;
-    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &other, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
-    if (!strstr(err.message, "made with other bake parameters (photons 20000, seed 7,") ||
-        !strstr(err.message, "than these (photons 20000, seed 8,"))
+    assert_int_equal(sg_bake_job_load(ckpt, w, &other, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
+    if (!strstr(err.message, "made with other bake parameters (photons, seed 7,") ||
+        !strstr(err.message, "than these (photons, seed 8,"))
         fail_msg("message: %s", err.message);
-    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH ^ 1, &out, &err), SG_ERR_INVALID_ARG);
+    assert_int_equal(sg_bake_job_load(ckpt, w, &d, SCENE_HASH ^ 1, &out, &err), SG_ERR_INVALID_ARG);
     assert_non_null(strstr(err.message, "made for another scene"));
     expect_load_fails(ckpt, w, SCENE_HASH, SG_ERR_INVALID_ARG, "a checkpoint of an unfinished bake");
-    /* a record's flux made negative (with fresh CRCs), then a flipped byte */
+    /* a record's flux made negative (with fresh CRCs), then a flipped byte, then half a file */
     const char *bad = tmp_path("bad.ckpt");
-    rewrite(ckpt, bad, "PHFG", 3, -2.0f, SG_BAKE_FLAG_CHECKPOINT);
-    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
-    assert_non_null(strstr(err.message, "photon record 3: its flux is not finite and >= 0"));
+    rewrite(ckpt, bad, "PHFG", 0, -2.0f, SG_BAKE_FLAG_CHECKPOINT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "photon record 0: its flux is not finite and >= 0"));
     size_t n;
     unsigned char *bytes = read_all(ckpt, &n);
     bytes[n - 2] ^= 1;
     write_all(bad, bytes, n);
-    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
     assert_non_null(strstr(err.message, bad));
     write_all(bad, bytes, n / 3);
-    assert_int_equal(sg_bake_checkpoint_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
     free(bytes);
+    /* the sites' sections: a hit naming a splat the scene lacks, a NaN
+     * ratio, hit ranges out of order, a sample level above the job's */
+    save_stopped(w, &d, SG_BAKE_STAGE_SITES, sites);
+    rewrite(sites, bad, "H000", 0, float_of_bits(9000000u), SG_BAKE_FLAG_CHECKPOINT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "model 0, hit 0: splat 9000000"));
+    rewrite(sites, bad, "R000", 4, NAN, SG_BAKE_FLAG_CHECKPOINT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "section R000: value 4 is NaN"));
+    rewrite(sites, bad, "F000", 2, float_of_bits(0xffffffffu), SG_BAKE_FLAG_CHECKPOINT); /* first[1]'s low half */
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "section F000: site 1's hits do not follow"));
+    rewrite(sites, bad, "L000", 0, float_of_bits(0x07070707u), SG_BAKE_FLAG_CHECKPOINT); /* levels 7 */
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "model 0, sample point 0: splat"));
+    /* glossy bins: a NaN half */
+    save_stopped(w, &d, SG_BAKE_STAGE_GLOSSY, gl);
+    if (sg_bake_job_load(gl, w, &d, SCENE_HASH, &out, &err) != SG_OK)
+        fail_msg("glossy checkpoint: %s", err.message);
+    sg_bake_job_destroy(out);
+    out = NULL;
+    rewrite(gl, bad, "G000", 0, float_of_bits(0x7fc00000u), SG_BAKE_FLAG_CHECKPOINT);
+    assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "section G000: value 1 is not finite"));
     /* a finished bake is not a checkpoint */
-    sg_bake *b = make_bake(w, 20000);
+    sg_bake *b = NULL;
+    assert_int_equal(sg_bake_create(w, &d, &b, &err), SG_OK);
     const char *bk = tmp_path("checks.sgbake");
     assert_int_equal(sg_bake_save(b, bk, SCENE_HASH, &err), SG_OK);
-    assert_int_equal(sg_bake_checkpoint_load(bk, w, &d, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
+    assert_int_equal(sg_bake_job_load(bk, w, &d, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
     assert_non_null(strstr(err.message, "a finished bake, not a checkpoint"));
-    assert_null(out.px);
-    /* an empty checkpoint (Ctrl-C before the first block) loads too */
-    sg_photon_map empty = {0};
-    assert_int_equal(sg_bake_checkpoint_save(ckpt, &d, &empty, SCENE_HASH, &err), SG_OK);
-    assert_int_equal(sg_bake_checkpoint_load(ckpt, w, &d, SCENE_HASH, &out, &err), SG_OK);
-    assert_int_equal(out.blocks, 0);
-    assert_int_equal(out.count, 0);
-    assert_int_equal(sg_photons_trace_more(w, &d.photons, 2, &out, &err), SG_OK);
-    assert_maps_equal(&m, &out);
-    sg_photon_map_free(&out);
+    assert_null(out);
+    /* a job saved before any work (Ctrl-C before the first block) loads and runs */
+    sg_bake_job *j = NULL;
+    assert_int_equal(sg_bake_job_create(w, &d, &j, &err), SG_OK);
+    assert_int_equal(sg_bake_job_save(j, ckpt, SCENE_HASH, &err), SG_OK);
+    sg_bake_job_destroy(j);
+    assert_int_equal(sg_bake_job_load(ckpt, w, &d, SCENE_HASH, &out, &err), SG_OK);
+    assert_int_equal(sg_bake_job_run(out, NULL, NULL, &err), SG_OK);
+    sg_bake *b2 = NULL;
+    assert_int_equal(sg_bake_job_finish(out, &b2, &err), SG_OK);
+    assert_saves_as(b2, "from_empty.sgbake", bk);
+    sg_bake_job_destroy(out);
     sg_bake_destroy(b);
-    sg_photon_map_free(&m);
+    sg_bake_destroy(b2);
     sg_world_destroy(w);
 }
 
@@ -651,7 +790,9 @@ int main(void)
         cmocka_unit_test(test_bake_io_bad_values),
         cmocka_unit_test(test_bake_io_glossy_roundtrip),
         cmocka_unit_test(test_bake_io_glossy_corrupt),
-        cmocka_unit_test(test_bake_io_resume_equals_one_pass),
+        cmocka_unit_test(test_bake_io_photons_in_parts_equal_one_pass),
+        cmocka_unit_test(test_bake_job_resume_transport),
+        cmocka_unit_test(test_bake_job_resume_photons),
         cmocka_unit_test(test_bake_io_checkpoint_checks),
         cmocka_unit_test(test_photons_progress_and_cancel),
     };
