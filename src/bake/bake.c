@@ -397,7 +397,7 @@ static sg_vec3 irradiance_of(const sg_bake *b, uint32_t model, const uint32_t *i
             ind[c] += wts[j] * v[3 + c];
         }
     }
-    sg_vec3 e0 = sg_irradiance_table_eval(b->e0, side ? sg_v3_scale(normal, -1.0f) : normal);
+    sg_vec3 e0 = sg_irradiance_table_eval_fast(b->e0, side ? sg_v3_scale(normal, -1.0f) : normal);
     return sg_v3(e0.x * r[0] + ind[0], e0.y * r[1] + ind[1], e0.z * r[2] + ind[2]);
 }
 

@@ -31,6 +31,10 @@ static double texel_lum(const sg_envmap *m, int i, int j, int W, int H)
     return 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z;
 }
 
+/* Cells per side of the fast table's octahedral grid: 1.4 degrees each,
+ * 200 KB of vertices (fits a core's L2). */
+enum { FAST = 128 };
+
 struct sg_irradiance_table {
     int rows, cols;  /* table of normals, invariant 1      */
     float *E;        /* 3 rows cols RGB irradiances         */
@@ -44,7 +48,23 @@ struct sg_irradiance_table {
     const sg_envmap *map; /* for the uv of a normal only: sg_envmap_dir_to_uv
                              is a pure function of the rotation; the map
                              must outlive the table (bake-time use)     */
+    float *fast;     /* (FAST + 1)^2 RGB: sg_irradiance_table_eval at the
+                        vertices of an octahedral grid of normals        */
 };
+
+/* The octahedral map of unit normals with +Y at the centre of the square
+ * [-1,1]^2 (Engelhardt & Dachsbacher 2008, here about Y): continuous, its
+ * square's border folds onto itself, so a grid of values at vertices
+ * interpolates bilinearly with no seam and no wrap logic. */
+static sg_vec3 octahedral_decode(float a, float b)
+{
+    float y = 1.0f - fabsf(a) - fabsf(b), x = a, z = b;
+    if (y < 0.0f) {
+        x = (1.0f - fabsf(b)) * (a < 0.0f ? -1.0f : 1.0f);
+        z = (1.0f - fabsf(a)) * (b < 0.0f ? -1.0f : 1.0f);
+    }
+    return sg_v3_normalize(sg_v3(x, y, z));
+}
 
 sg_status sg_irradiance_table_create(const sg_envmap *m, const sg_irradiance_table_desc *desc,
                                      sg_irradiance_table **out, sg_error *err)
@@ -173,6 +193,18 @@ sg_status sg_irradiance_table_create(const sg_envmap *m, const sg_irradiance_tab
     }
     sg_free(cell);
     sg_free(dir);
+    /* The fast table: the exact eval at every vertex of the octahedral grid. */
+    size_t nv = (size_t)(FAST + 1) * (FAST + 1);
+    if (!(t->fast = sg_alloc_array(3 * nv, sizeof *t->fast))) {
+        sg_irradiance_table_destroy(t);
+        return sg_error_set(err, SG_ERR_NOMEM, "irradiance table: out of memory");
+    }
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (size_t v = 0; v < nv; ++v) {
+        float a = -1.0f + 2.0f * (float)(v % (FAST + 1)) / FAST, b = -1.0f + 2.0f * (float)(v / (FAST + 1)) / FAST;
+        sg_vec3 e = sg_irradiance_table_eval(t, octahedral_decode(a, b));
+        t->fast[3 * v] = e.x, t->fast[3 * v + 1] = e.y, t->fast[3 * v + 2] = e.z;
+    }
     *out = t;
     return SG_OK;
 }
@@ -181,6 +213,7 @@ void sg_irradiance_table_destroy(sg_irradiance_table *t)
 {
     if (!t)
         return;
+    sg_free(t->fast);
     sg_free(t->E);
     sg_free(t->bright_w);
     sg_free(t->bright_p);
@@ -237,4 +270,28 @@ sg_vec3 sg_irradiance_table_eval(const sg_irradiance_table *t, sg_vec3 n)
         }
     }
     return e;
+}
+
+sg_vec3 sg_irradiance_table_eval_fast(const sg_irradiance_table *t, sg_vec3 n)
+{
+    float s = fabsf(n.x) + fabsf(n.y) + fabsf(n.z);
+    if (!(s > 0.0f))
+        return sg_irradiance_table_eval(t, n);
+    float a = n.x / s, b = n.z / s;
+    if (n.y < 0.0f) {
+        float a0 = a;
+        a = (1.0f - fabsf(b)) * (a0 < 0.0f ? -1.0f : 1.0f);
+        b = (1.0f - fabsf(a0)) * (b < 0.0f ? -1.0f : 1.0f);
+    }
+    float x = (a + 1.0f) * (0.5f * FAST), y = (b + 1.0f) * (0.5f * FAST);
+    x = x < 0.0f ? 0.0f : (x > (float)FAST ? (float)FAST : x);
+    y = y < 0.0f ? 0.0f : (y > (float)FAST ? (float)FAST : y);
+    int i = (int)x, j = (int)y;
+    i = i < FAST ? i : FAST - 1;
+    j = j < FAST ? j : FAST - 1;
+    float fx = x - (float)i, fy = y - (float)j;
+    const float *p = t->fast + 3 * ((size_t)j * (FAST + 1) + (size_t)i), *q = p + 3 * (FAST + 1);
+    float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+    return sg_v3(w00 * p[0] + w10 * p[3] + w01 * q[0] + w11 * q[3], w00 * p[1] + w10 * p[4] + w01 * q[1] + w11 * q[4],
+                 w00 * p[2] + w10 * p[5] + w01 * q[2] + w11 * q[5]);
 }

@@ -57,4 +57,13 @@ void sg_irradiance_table_destroy(sg_irradiance_table *t);
  * RGB, >= 0, finite. */
 sg_vec3 sg_irradiance_table_eval(const sg_irradiance_table *t, sg_vec3 n);
 
+/* E0 at world normal n from a second, fast table: sg_irradiance_table_eval
+ * at the vertices of a 128 x 128 octahedral grid of normals (+Y at its
+ * centre), bilinear between them: a dozen loads and no trigonometry, for
+ * per-pixel use. Exact at the vertices; between them the interpolation
+ * rounds a sun's terminator over one cell (1.4 degrees) and is otherwise
+ * smooth: its error is measured in tests/envmap/test_irradiance_table.c.
+ * RGB, >= 0, finite. */
+sg_vec3 sg_irradiance_table_eval_fast(const sg_irradiance_table *t, sg_vec3 n);
+
 #endif

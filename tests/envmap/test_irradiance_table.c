@@ -108,6 +108,56 @@ static void test_irradiance_table_sun(void **state)
     check(SG_ANALYTIC_SUNSKY, 1024, 140.0f, sg_v3(0.9f, 0.16f, 0.3f), 0.005, "sun at 10 deg, rotated 140 deg");
 }
 
+/* The fast table (octahedral grid of 128 x 128 cells, bilinear) against
+ * the exact eval over 20000 Fibonacci normals. Between vertices a smooth
+ * E0 errs by about 1e-4 of its largest value (cells of 1.4 degrees, as the
+ * main table); across a sun's terminator the bilinear blend of a clamped
+ * cosine errs by up to a quarter of the cell's angle, 0.0245 / 4 = 0.6%,
+ * of the sun's irradiance: so 1% of the largest E0 bounds every normal,
+ * and the mean error stays below 1e-3 of the mean E0 (the terminator's
+ * band is 1.4 degrees wide). +Y and -Y are grid vertices, exact to
+ * rounding (a ground plane's normal). */
+static void check_fast(sg_analytic_type type, float rotation, sg_vec3 sun, const char *what)
+{
+    sg_envmap *m = make_map(type, 1024, rotation, sun);
+    sg_irradiance_table *t = NULL;
+    assert_int_equal(sg_irradiance_table_create(m, NULL, &t, NULL), SG_OK);
+    double worst = 0.0, top = 0.0, sum_err = 0.0, sum = 0.0;
+    enum { N = 20000 };
+    for (int k = 0; k < N; ++k) {
+        double y = 1.0 - (k + 0.5) / (N / 2.0), r = sqrt(fmax(0.0, 1.0 - y * y)), phi = k * 2.399963229728653;
+        sg_vec3 n = sg_v3((float)(r * cos(phi)), (float)y, (float)(r * sin(phi)));
+        sg_vec3 a = sg_irradiance_table_eval_fast(t, n), b = sg_irradiance_table_eval(t, n);
+        assert_true(isfinite(a.x) && a.x >= 0.0f && isfinite(a.y) && a.y >= 0.0f && isfinite(a.z) && a.z >= 0.0f);
+        double e = fmax(fabs(a.x - b.x), fmax(fabs(a.y - b.y), fabs(a.z - b.z)));
+        worst = fmax(worst, e);
+        top = fmax(top, fmax(b.x, fmax(b.y, b.z)));
+        sum_err += fabs(a.y - b.y);
+        sum += b.y;
+    }
+    double pole = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        sg_vec3 n = sg_v3(0.0f, k ? -1.0f : 1.0f, 0.0f);
+        sg_vec3 a = sg_irradiance_table_eval_fast(t, n), b = sg_irradiance_table_eval(t, n);
+        pole = fmax(pole, fabs(a.y - b.y) / fmax(b.y, 1e-30));
+    }
+    fprintf(stderr, "%s, fast table: worst %.5f of the largest E0, mean %.2e of the mean, poles %.1e\n", what,
+            worst / top, sum_err / sum, pole);
+    if (!(worst <= 0.01 * top) || !(sum_err <= 1e-3 * sum) || !(pole <= 1e-5))
+        fail_msg("%s: fast table errs by %.5f of the largest E0 (1%%), %.2e of the mean (1e-3), %.1e at a pole",
+                 what, worst / top, sum_err / sum, pole);
+    sg_irradiance_table_destroy(t);
+    sg_envmap_destroy(m);
+}
+
+static void test_irradiance_table_fast(void **state)
+{
+    (void)state;
+    check_fast(SG_ANALYTIC_SKY, 73.0f, sg_v3(0, 1, 0), "sky rotated 73 deg");
+    check_fast(SG_ANALYTIC_SUNSKY, -20.0f, sg_v3(0.4f, 0.5f, -0.3f), "sun at 45 deg");
+    check_fast(SG_ANALYTIC_SUNSKY, 140.0f, sg_v3(0.9f, 0.16f, 0.3f), "sun at 10 deg");
+}
+
 static void test_irradiance_table_bad_sizes(void **state)
 {
     (void)state;
@@ -128,6 +178,7 @@ int main(void)
         cmocka_unit_test(test_irradiance_table_uniform_one_texel),
         cmocka_unit_test(test_irradiance_table_sky_rotated),
         cmocka_unit_test(test_irradiance_table_sun),
+        cmocka_unit_test(test_irradiance_table_fast),
         cmocka_unit_test(test_irradiance_table_bad_sizes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
