@@ -17,7 +17,7 @@ static const char usage[] =
     "usage: splatgi-verify [options]\n"
     "Speed against accuracy and the stability map: CSV and Markdown in --out-dir.\n"
     "  --ci               tiny sizes, built-in bunny only (the ctest sweep, < 1 min)\n"
-    "  --parts A,B,...    stability, surfaces, bake, scaling, headline, all (default all)\n"
+    "  --parts A,B,...    stability, surfaces, bake, scaling, headline, gi, all (default all)\n"
     "  --sizes A,B,...    scaling point counts (default 2000,8000,32000,128000,512000,1000000;\n"
     "                     the process peaks at ~0.6 KB per point: 24M needs ~13 GiB;\n"
     "                     --ci: 2000,8000)\n"

@@ -2,7 +2,8 @@
 # verify-charts.sh DIR — draws the verification suite's charts from the CSV
 # that splatgi-verify wrote into DIR, into DIR:
 #   verify_surfaces.png   frame time against error per surface model/option
-#   verify_bake.png       bake time against error (photons, k, direct samples)
+#   verify_bake.png       bake time against error, both indirect estimators
+#   verify_gi.png         CPU time against error on concave close-ups (log-log)
 #   verify_scaling.png    fps, memory, per-ray traversal, times against model size
 #   verify_stability.png  the stability map as a heat-map table
 # A chart whose CSV is absent is skipped. Exit 77 when gnuplot is missing.
@@ -62,26 +63,34 @@ fi
 # ---- 2. bake: bake time against error ---------------------------------------
 csv="$dir/bake.csv"
 if [ -f "$csv" ]; then
-  # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse,
-  # 19 spacing, 20 sample points, 21 glossy, 22 glossy_res, 23 glossy_rays
+  # columns: 1 sweep, 2 photons, 3 k, 4 direct, 9 bake_s, 14 rel_mse, 19 spacing,
+  # 20 sample points, 21 glossy, 22 glossy_res, 23 glossy_rays, 24 estimator, 25 gather_rays
   plots=()
-  colours=("#1f6fb4" "#d62728" "#2ca02c" "#9467bd" "#ff7f0e" "#8c564b" "#e377c2")
+  colours=("#1f6fb4" "#17becf" "#d62728" "#ff7f0e" "#8c564b" "#9467bd" "#e377c2")
   i=0
-  for sw in photons photons_carry_direct k direct spacing glossy_res glossy_rays; do
+  for sw in transport_rays transport_spacing photons photons_carry_direct k glossy_res glossy_rays; do
     f="$tmpd/b_$sw"
-    awk -F, -v s="$sw" 'NR > 1 && $1 == s { lab = (s ~ /^photons/) ? ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3)) : (s == "k" ? "k=" $3 : (s == "spacing" ? ($19 < 0 ? "all" : sprintf("s=%g", $19)) : (s == "glossy_res" ? ($22 == 0 ? "R=auto" : "R=" $22) : (s == "glossy_rays" ? "M=" $23 : "S=" $4)))); print $9, $14, lab }' "$csv" | sort -n >"$f"
+    awk -F, -v s="$sw" 'NR > 1 && $1 == s {
+        if (s == "transport_rays") lab = $4 "+" $25
+        else if (s == "transport_spacing") lab = ($19 < 0 ? "all" : sprintf("s=%g", $19))
+        else if (s ~ /^photons/) lab = ($2 >= 1e6 ? sprintf("%gM", $2 / 1e6) : sprintf("%gk", $2 / 1e3))
+        else if (s == "k") lab = "k=" $3
+        else if (s == "glossy_res") lab = ($22 == 0 ? "R=auto" : "R=" $22)
+        else lab = "M=" $23
+        print $9, $14, lab }' "$csv" | sort -n >"$f"
     [ -s "$f" ] || continue
     c="${colours[$i]}"
     case "$sw" in
-      photons) t="photon count (k 64, direct light by S = $(awk -F, 'NR > 1 && $1 == "photons" { print $4; exit }' "$csv") shadow rays)";;
-      photons_carry_direct) t="photon count, photons carry the direct light (k 64)";;
-      k) t="gather k ($(awk -F, 'NR > 1 && $1 == "k" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
-      direct) t="direct-light samples S ($(awk -F, 'NR > 1 && $1 == "direct" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
-      spacing) t="sample-point spacing (x median splat radius; default 4 is on the photon curve)";;
+      transport_rays) t="transport (default): envmap + cosine rays per sample site";;
+      transport_spacing) t="transport: sample spacing (x median splat radius; default 4 is 32+64)";;
+      photons) t="photons (first estimator): photon count, k 64, direct by 16 + 32 rays per site";;
+      photons_carry_direct) t="photons: photon count, photons carry the direct light too";;
+      k) t="photons: gather k ($(awk -F, 'NR > 1 && $1 == "k" { printf "%gk photons", $2 / 1000; exit }' "$csv"))";;
       glossy_res) t="glossy model (GGX, roughness 0.3): bins per side R (auto = 27), own reference";;
       glossy_rays) t="glossy model: rays per glossy sample point M (default 128 = R=auto)";;
     esac
-    plots+=("\"$f\" u 1:2 w linespoints lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
+    lt=$([ "${sw#photons}" != "$sw" ] || [ "$sw" = "k" ] && echo "dt 2" || echo "dt 1")
+    plots+=("\"$f\" u 1:2 w linespoints lw 2 $lt pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
     plots+=("\"$f\" u 1:2:3 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
     i=$((i + 1))
   done
@@ -92,13 +101,51 @@ set terminal $(term 1100 750)
 set termoption noenhanced
 set logscale xy
 set grid xtics ytics mxtics mytics lc rgb "#cccccc" dt 3
-set xlabel "bake time (s): photon trace + gather + direct light"
+set xlabel "bake time (s, wall, 2 threads)"
 set ylabel "relMSE of the lookup frame against the converged reference"
-set title "Bake: time against error ($pts splats)"
+set title "Bake: time against error, transport (solid) and photon (dashed) estimators ($pts splats)"
 set key top right box opaque font ",9"
 set arrow from graph 0, first 0.01 to graph 1, first 0.01 nohead dt 4 lc rgb "#b40000"
 plot $plot_cmd
 GP
+fi
+
+# ---- 2b. global illumination on concave close-ups ---------------------------
+csv="$dir/gi.csv"
+if [ -f "$csv" ]; then
+  # columns: 1 scene, 2 estimator, 3 label, 13 total_cpu_s, 14 rel_mse, 20 ref_noise
+  scenes="$(awk -F, 'NR > 1 && !seen[$1]++ { print $1 }' "$csv")"
+  n="$(echo "$scenes" | wc -l)"
+  cols=$(( n < 2 ? n : 2 )); rows=$(( (n + cols - 1) / cols ))
+  {
+    echo "set terminal $(term $((650 * cols)) $((480 * rows)))"
+    echo "set termoption noenhanced"
+    echo "set multiplot layout $rows,$cols title \"Bake error against total CPU time (world + bake + one 512x512 frame) on concave close-ups\""
+    echo "set logscale xy"
+    echo "set grid xtics ytics mxtics mytics lc rgb \"#cccccc\" dt 3"
+    echo "set key bottom left box opaque font \",8\""
+    echo "set xlabel \"CPU seconds, both threads\""
+    echo "set ylabel \"relMSE against the reference\""
+    for sc in $scenes; do
+      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $2 == "transport" { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_t_$sc"
+      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $2 == "photons" { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_p_$sc"
+      noise="$(awk -F, -v s="$sc" 'NR > 1 && $1 == s { print $20; exit }' "$csv")"
+      echo "set title \"$sc\""
+      echo "unset arrow"
+      echo "set arrow from graph 0, first 0.002 to graph 1, first 0.002 nohead dt 4 lc rgb \"#2ca02c\""
+      echo "set arrow from graph 0, first 0.003 to graph 1, first 0.003 nohead dt 4 lc rgb \"#b40000\""
+      echo "set arrow from first 38, graph 0 to first 38, graph 1 nohead dt 3 lc rgb \"#7f7f7f\""
+      echo "plot \"$tmpd/gi_t_$sc\" u 1:2 w lp lw 2 pt 7 lc rgb \"#1f6fb4\" t \"transport (default estimator)\", \\"
+      echo "     \"$tmpd/gi_t_$sc\" u 1:2:3 w labels offset char 0,0.9 font \",7\" tc rgb \"#1f6fb4\" notitle, \\"
+      echo "     \"$tmpd/gi_p_$sc\" u 1:2 w lp lw 2 dt 2 pt 5 lc rgb \"#d62728\" t \"photons (first estimator)\", \\"
+      echo "     \"$tmpd/gi_p_$sc\" u 1:2:3 w labels offset char 0,-0.9 font \",7\" tc rgb \"#d62728\" notitle, \\"
+      echo "     $noise w l dt 3 lc rgb \"#555555\" t \"the reference's own noise (floor of the measure)\", \\"
+      echo "     NaN w l dt 4 lc rgb \"#b40000\" t \"relMSE 0.003 (green: 0.002)\", \\"
+      echo "     NaN w l dt 3 lc rgb \"#7f7f7f\" t \"38 CPU s: a Cycles vertex bake's 0.0031 (issue 12, another scene)\""
+    done
+    echo "unset multiplot"
+  } >"$tmpd/gi.gp"
+  plot "$dir/verify_gi.png" <"$tmpd/gi.gp"
 fi
 
 # ---- 3. scaling with model size --------------------------------------------

@@ -59,7 +59,6 @@ static const surf_cfg default_cfg = {"mls", SG_SURFACE_MLS, 0, 8, 1.0f};
 typedef struct plan {
     size_t points;         /* model points of SURFACES, BAKE, HEADLINE    */
     int image, frame, spp; /* error image side, timed frame side, ref spp */
-    size_t photons;        /* SURFACES and SCALING bakes                  */
     int direct;            /* SURFACES bakes' direct samples              */
     int scaling_direct;
     int ground;            /* the built-in ground under the model (not in
@@ -69,9 +68,9 @@ typedef struct plan {
 static plan make_plan(const vctx *c)
 {
     if (c->d.ci)
-        return (plan){.points = 5000, .image = 32, .frame = 64, .spp = 16, .photons = 20000, .direct = 2,
+        return (plan){.points = 5000, .image = 32, .frame = 64, .spp = 16, .direct = 2,
                       .scaling_direct = 2, .ground = 0};
-    return (plan){.points = 100000, .image = 128, .frame = 512, .spp = 1024, .photons = 1000000, .direct = 16,
+    return (plan){.points = 100000, .image = 128, .frame = 512, .spp = 1024, .direct = 16,
                   .scaling_direct = 4, .ground = 1};
 }
 
@@ -285,9 +284,9 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
     sg_image direct_ref = {0};
     double noise = 0;
     sg_status st = SG_OK;
-    sg_bake_desc bd = {.photons = {.count = p->photons}, .direct_samples = p->direct};
-    sg_verify__log(c, "surfaces: %s, %zu points%s, bake %zu photons k 64 direct %d; error %dx%d, frames %dx%d\n",
-                   ms->name, p->points, p->ground ? " + ground" : "", p->photons, p->direct, p->image, p->image,
+    sg_bake_desc bd = {.direct_samples = p->direct, .gather_rays = 2 * p->direct};
+    sg_verify__log(c, "surfaces: %s, %zu points%s, bake %d + %d rays per sample site; error %dx%d, frames %dx%d\n",
+                   ms->name, p->points, p->ground ? " + ground" : "", p->direct, 2 * p->direct, p->image, p->image,
                    p->frame, p->frame);
     for (int i = 0; i < n && st == SG_OK; i++) {
         const surf_cfg *cfg = &cfgs[i];
@@ -364,10 +363,13 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
 
 typedef struct bake_pt {
     const char *sweep;
-    size_t photons, k;
-    int direct;
-    float spacing; /* sg_bake_desc.sample_spacing: 0 the material's, < 0 every splat */
-    int glossy;    /* 1: the GGX model (build_world), whose bins the next two set  */
+    sg_bake_indirect indirect; /* the estimator                                    */
+    size_t photons;            /* photon estimator                                 */
+    size_t k;                  /* photon estimator's gather                        */
+    int direct;                /* envmap rays per sample site (-1: photons carry it) */
+    int gather_rays;           /* cosine rays per sample site; 0 = default         */
+    float spacing;             /* sg_bake_desc.sample_spacing: 0 the material's, < 0 every splat */
+    int glossy;                /* 1: the GGX model (build_world), whose bins the next two set */
     int glossy_res, glossy_rays; /* sg_bake_desc's; 0 = defaults                  */
 } bake_pt;
 
@@ -375,41 +377,46 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
 {
     bake_pt pts[64];
     int n = 0;
+    const sg_bake_indirect T = SG_BAKE_INDIRECT_TRANSPORT, P = SG_BAKE_INDIRECT_PHOTONS;
     if (c->d.ci) {
+        pts[n++] = (bake_pt){"transport_rays", T, 0, 0, 4, 8, 0.0f, 0, 0, 0};
+        pts[n++] = (bake_pt){"transport_rays", T, 0, 0, 8, 16, 0.0f, 0, 0, 0};
+        pts[n++] = (bake_pt){"transport_spacing", T, 0, 0, 8, 16, 8.0f, 0, 0, 0};
         static const size_t ph[] = {10000, 40000};
-        for (int i = 0; i < 2; i++) {
-            pts[n++] = (bake_pt){"photons", ph[i], 64, 2, 0.0f, 0, 0, 0};
-            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1, 0.0f, 0, 0, 0};
-        }
-        pts[n++] = (bake_pt){"k", 20000, 16, 2, 0.0f, 0, 0, 0};
-        pts[n++] = (bake_pt){"direct", 20000, 64, 1, 0.0f, 0, 0, 0};
-        pts[n++] = (bake_pt){"spacing", 20000, 64, 2, 8.0f, 0, 0, 0};
-    } else {
-        static const size_t ph[] = {250000, 1000000, 4000000};
-        for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"photons", ph[i], 64, 16, 0.0f, 0, 0, 0};
-        for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"photons_carry_direct", ph[i], 64, -1, 0.0f, 0, 0, 0};
-        static const size_t ks[] = {16, 32, 128};
-        for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"k", 1000000, ks[i], 16, 0.0f, 0, 0, 0};
-        static const int ds[] = {1, 4};
         for (int i = 0; i < 2; i++)
-            pts[n++] = (bake_pt){"direct", 1000000, 64, ds[i], 0.0f, 0, 0, 0};
-        /* Sample density: spacing 2, 8 x the median radius and every splat
-         * beside the default 4 of the photons sweep's 1M point. */
+            pts[n++] = (bake_pt){"photons", P, ph[i], 64, 2, 0, 0.0f, 0, 0, 0};
+        pts[n++] = (bake_pt){"photons_carry_direct", P, 20000, 64, -1, 0, 0.0f, 0, 0, 0};
+        pts[n++] = (bake_pt){"k", P, 20000, 16, 2, 0, 0.0f, 0, 0, 0};
+    } else {
+        /* The transport estimator: rays per site (envmap + cosine; the
+         * default is 32 + 64), then the sample spacing at the default rays
+         * (2, 8 x the median radius and every splat beside the default 4). */
+        static const int er[] = {8, 16, 32, 64};
+        for (int i = 0; i < 4; i++)
+            pts[n++] = (bake_pt){"transport_rays", T, 0, 0, er[i], 2 * er[i], 0.0f, 0, 0, 0};
         static const float sp[] = {2.0f, 8.0f, -1.0f};
         for (int i = 0; i < 3; i++)
-            pts[n++] = (bake_pt){"spacing", 1000000, 64, 16, sp[i], 0, 0, 0};
+            pts[n++] = (bake_pt){"transport_spacing", T, 0, 0, 32, 64, sp[i], 0, 0, 0};
+        /* The photon estimator (the first bake): photon count with direct
+         * light from 16 + 32 rays per sample site, photons carrying the
+         * direct light too, and the gather's k. */
+        static const size_t ph[] = {250000, 1000000, 4000000};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"photons", P, ph[i], 64, 16, 0, 0.0f, 0, 0, 0};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"photons_carry_direct", P, ph[i], 64, -1, 0, 0.0f, 0, 0, 0};
+        static const size_t ks[] = {16, 32, 128};
+        for (int i = 0; i < 3; i++)
+            pts[n++] = (bake_pt){"k", P, 1000000, ks[i], 16, 0, 0.0f, 0, 0, 0};
         /* Directional resolution, on the same model made glossy (GGX,
          * roughness 0.3: R = 27 by default) against its own reference:
          * bins per side R and rays per glossy sample point M. */
         static const int gr[] = {8, 16, 0, 32};
         for (int i = 0; i < 4; i++)
-            pts[n++] = (bake_pt){"glossy_res", 250000, 64, 16, 0.0f, 1, gr[i], 0};
+            pts[n++] = (bake_pt){"glossy_res", T, 0, 0, 0, 0, 0.0f, 1, gr[i], 0};
         static const int gm[] = {32, 512};
         for (int i = 0; i < 2; i++)
-            pts[n++] = (bake_pt){"glossy_rays", 250000, 64, 16, 0.0f, 1, 0, gm[i]};
+            pts[n++] = (bake_pt){"glossy_rays", T, 0, 0, 0, 0, 0.0f, 1, 0, gm[i]};
     }
     /* World 0 the Lambert model, world 1 (built when a glossy row comes)
      * the same model glossy; each with its own reference. */
@@ -428,7 +435,7 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
     vtable t = {0};
     sg_verify__tprintf(&t, "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,"
                            "frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points,glossy,"
-                           "glossy_res,glossy_rays\n");
+                           "glossy_res,glossy_rays,estimator,gather_rays\n");
     double best_s = INFINITY, best_err = INFINITY;
     int best = -1, best_reached = 0;
     for (int i = 0; i < n && st == SG_OK; i++) {
@@ -442,33 +449,36 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
             if ((st = reference(c, p, w[1], &sf[1], &ms->cam, &ref[1], &noise[1], err)) != SG_OK)
                 break;
         }
-        sg_bake_desc bd = {.photons = {.count = pts[i].photons}, .gather = {.k = (unsigned)pts[i].k},
-                           .direct_samples = pts[i].direct, .sample_spacing = pts[i].spacing,
+        sg_bake_desc bd = {.indirect = pts[i].indirect, .photons = {.count = pts[i].photons},
+                           .gather = {.k = (unsigned)pts[i].k}, .direct_samples = pts[i].direct,
+                           .gather_rays = pts[i].gather_rays, .sample_spacing = pts[i].spacing,
                            .glossy_res = pts[i].glossy_res, .glossy_rays = pts[i].glossy_rays};
+        sg_bake_desc rd = sg_bake_desc_resolve(&bd);
         bake_run br;
         st = run_bake(p, w[g], &ms->cam, &bd, 1, &br, err);
         if (st != SG_OK)
             break;
         sg_image_metrics m;
         char name[160];
-        snprintf(name, sizeof name, "bake_%s_%s_p%zu_k%zu_d%d_s%g_r%d_m%d%s", ms->name, pts[i].sweep,
-                 pts[i].photons, pts[i].k, pts[i].direct, (double)pts[i].spacing, pts[i].glossy_res,
-                 pts[i].glossy_rays, c->d.ci ? "_ci" : "");
+        snprintf(name, sizeof name, "bake_%s_%s_p%zu_k%zu_d%d_g%d_s%g_r%d_m%d%s", ms->name, pts[i].sweep,
+                 pts[i].photons, pts[i].k, rd.direct_samples, rd.gather_rays, (double)pts[i].spacing,
+                 pts[i].glossy_res, pts[i].glossy_rays, c->d.ci ? "_ci" : "");
         st = sg_verify__compare(c, &br.img, &ref[g].mean, name, &m, err);
         sg_image_free(&br.img);
         if (st != SG_OK)
             break;
         sg_verify__tprintf(&t, "%s,%zu,%zu,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.3f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3g,%g,%zu,"
-                               "%d,%d,%d\n",
-                           pts[i].sweep, pts[i].photons, pts[i].k, pts[i].direct, splats[g], br.trace_s, br.gather_s,
-                           br.direct_s, br.bake_s, br.bake_mib, br.frame_s, 1.0 / br.frame_s, p->frame, m.rel_mse,
-                           m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels, noise[g],
-                           (double)pts[i].spacing, br.sample_points, g, pts[i].glossy_res, pts[i].glossy_rays);
+                               "%d,%d,%d,%s,%d\n",
+                           pts[i].sweep, pts[i].photons, pts[i].k, rd.direct_samples, splats[g], br.trace_s,
+                           br.gather_s, br.direct_s, br.bake_s, br.bake_mib, br.frame_s, 1.0 / br.frame_s, p->frame,
+                           m.rel_mse, m.energy_ratio_lum, m.p99_rel_error, m.nan_pixels + m.inf_pixels, noise[g],
+                           (double)pts[i].spacing, br.sample_points, g, pts[i].glossy_res, pts[i].glossy_rays,
+                           rd.indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", rd.gather_rays);
         t.rows++;
-        sg_verify__log(c, "  %-21s photons %8zu k %3zu direct %3d: bake %.2f s (trace %.2f, gather %.2f), relMSE %.5f "
-                          "energy %.4f p99 %.3f\n",
-                       pts[i].sweep, pts[i].photons, pts[i].k, pts[i].direct, br.bake_s, br.trace_s, br.gather_s,
-                       m.rel_mse, m.energy_ratio_lum, m.p99_rel_error);
+        sg_verify__log(c, "  %-21s photons %8zu k %3zu rays %3d + %3d spacing %4g: bake %.2f s (photons %.2f), "
+                          "relMSE %.5f energy %.4f p99 %.3f\n",
+                       pts[i].sweep, pts[i].photons, pts[i].k, rd.direct_samples, rd.gather_rays,
+                       (double)pts[i].spacing, br.bake_s, br.trace_s, m.rel_mse, m.energy_ratio_lum, m.p99_rel_error);
         int reached = m.rel_mse <= TARGET_REL_MSE;
         if (g) /* the headline's model is Lambert: pick among those */
             continue;
@@ -485,9 +495,9 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
                  "most accurate bake (none reached", TARGET_REL_MSE);
         if (!best_reached)
             strncat(c->best_config, ")", sizeof c->best_config - strlen(c->best_config) - 1);
-        c->best_photons = pts[best].photons;
-        c->best_k = pts[best].k;
-        c->best_direct = pts[best].direct;
+        c->best_desc = (sg_bake_desc){.indirect = pts[best].indirect, .photons = {.count = pts[best].photons},
+                                      .gather = {.k = (unsigned)pts[best].k}, .direct_samples = pts[best].direct,
+                                      .gather_rays = pts[best].gather_rays, .sample_spacing = pts[best].spacing};
     }
     c->sum->rows += t.rows;
     sg_verify__tfree(&t);
@@ -508,8 +518,8 @@ static sg_status part_scaling(vctx *c, const plan *p, const mscene *ms, sg_error
                            "leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,"
                            "frame_size\n");
     sg_status st = SG_OK;
-    sg_verify__log(c, "scaling: %s alone, frames %dx%d, bakes %zu photons direct %d\n", ms->name, p->frame, p->frame,
-                   p->photons, p->scaling_direct);
+    sg_verify__log(c, "scaling: %s alone, frames %dx%d, bakes %d + %d rays per sample site\n", ms->name, p->frame,
+                   p->frame, p->scaling_direct, 2 * p->scaling_direct);
     for (int i = 0; i < c->d.n_sizes && st == SG_OK; i++) {
         sg_scene_file sf = {0};
         sg_world *w = NULL;
@@ -522,7 +532,7 @@ static sg_status part_scaling(vctx *c, const plan *p, const mscene *ms, sg_error
         direct_run dr;
         st = run_direct(p, w, &ms->cam, &dr, err);
         bake_run br = {0};
-        sg_bake_desc bd = {.photons = {.count = p->photons}, .direct_samples = p->scaling_direct};
+        sg_bake_desc bd = {.direct_samples = p->scaling_direct, .gather_rays = 2 * p->scaling_direct};
         if (st == SG_OK)
             st = run_bake(p, w, &ms->cam, &bd, 0, &br, err);
         double rss = sg_verify__rss_mib();
@@ -554,20 +564,27 @@ static sg_status part_scaling(vctx *c, const plan *p, const mscene *ms, sg_error
 
 static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int nmodels, sg_error *err)
 {
-    size_t photons = c->best_config[0] ? c->best_photons : p->photons;
-    size_t k = c->best_config[0] ? c->best_k : 64;
-    int direct = c->best_config[0] ? c->best_direct : p->direct;
-    const char *why = c->best_config[0] ? c->best_config : "default bake (BAKE part not run)";
-    sg_verify__log(c, "headline: %d models, bake %zu photons k %zu direct %d (%s)\n", nmodels, photons, k, direct, why);
+    sg_bake_desc best = sg_bake_desc_resolve(c->best_config[0] ? &c->best_desc : NULL);
+    const char *why = c->best_config[0] ? c->best_config : "the library's defaults (BAKE part not run)";
+    size_t photons = best.photons.count, k = best.gather.k;
+    int direct = best.direct_samples, pe = best.indirect == SG_BAKE_INDIRECT_PHOTONS;
+    char bake_text[200];
+    if (pe)
+        snprintf(bake_text, sizeof bake_text, "photon estimator, %zu photons, gather k %zu, %d + %d rays per sample site",
+                 photons, k, direct, best.gather_rays);
+    else
+        snprintf(bake_text, sizeof bake_text, "transport estimator, %d + %d rays per sample site, spacing %s", direct,
+                 best.gather_rays, best.sample_spacing > 0 ? "set" : (best.sample_spacing < 0 ? "every splat" : "default"));
+    sg_verify__log(c, "headline: %d models, bake: %s (%s)\n", nmodels, bake_text, why);
     vtable t = {0}, md = {0};
     sg_verify__tprintf(&t, "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,"
-                           "bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise\n");
-    sg_verify__tprintf(&md, "Bake: %zu photons, gather k %zu, direct-light samples %d (%s, chosen by the bake sweep "
-                            "on the first model). fps: the bake's lookup frame at %dx%d; error: its %dx%d frame "
-                            "against a %d-spp reference at pixel centres.\n\n"
+                           "bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise,estimator,"
+                           "gather_rays\n");
+    sg_verify__tprintf(&md, "Bake: %s (%s, chosen by the bake sweep on the first model). fps: the bake's lookup "
+                            "frame at %dx%d; error: its %dx%d frame against a %d-spp reference at pixel centres.\n\n"
                             "| model | points (+ ground) | fps | bake s | memory MiB (scene + bake; process RSS) | "
                             "relMSE | energy ratio | p99 rel. error | NaN |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-                       photons, k, direct, why, p->frame, p->frame, p->image, p->image, p->spp);
+                       bake_text, why, p->frame, p->frame, p->image, p->image, p->spp);
     sg_status st = SG_OK;
     for (int i = 0; i < nmodels && st == SG_OK; i++) {
         const mscene *ms = &models[i];
@@ -583,9 +600,8 @@ static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int
         double noise = 0;
         st = reference(c, p, w, &sf, &ms->cam, &ref, &noise, err);
         bake_run br = {0};
-        sg_bake_desc bd = {.photons = {.count = photons}, .gather = {.k = (unsigned)k}, .direct_samples = direct};
         if (st == SG_OK)
-            st = run_bake(p, w, &ms->cam, &bd, 1, &br, err);
+            st = run_bake(p, w, &ms->cam, &best, 1, &br, err);
         sg_image_metrics m;
         char name[160];
         snprintf(name, sizeof name, "headline_%s%s", ms->name, c->d.ci ? "_ci" : "");
@@ -593,10 +609,12 @@ static sg_status part_headline(vctx *c, const plan *p, const mscene *models, int
             st = sg_verify__compare(c, &br.img, &ref.mean, name, &m, err);
         double rss = sg_verify__rss_mib();
         if (st == SG_OK) {
-            sg_verify__tprintf(&t, "%s,%zu,%zu,%zu,%zu,%d,%.4f,%.6f,%.3f,%d,%.3f,%.3f,%.1f,%.6g,%.6g,%.6g,%zu,%d,%d,%.3g\n",
+            sg_verify__tprintf(&t, "%s,%zu,%zu,%zu,%zu,%d,%.4f,%.6f,%.3f,%d,%.3f,%.3f,%.1f,%.6g,%.6g,%.6g,%zu,%d,%d,%.3g,"
+                                   "%s,%d\n",
                                ms->name, p->points, splats, photons, k, direct, br.bake_s, br.frame_s,
                                1.0 / br.frame_s, p->frame, mib, br.bake_mib, rss, m.rel_mse, m.energy_ratio_lum,
-                               m.p99_rel_error, m.nan_pixels + m.inf_pixels, p->spp, p->image, noise);
+                               m.p99_rel_error, m.nan_pixels + m.inf_pixels, p->spp, p->image, noise,
+                               pe ? "photons" : "transport", best.gather_rays);
             t.rows++;
             sg_verify__tprintf(&md, "| %s | %zu (%zu) | %.1f | %.2f | %.1f + %.1f; %.0f | %.4f | %.4f | %.3f | %zu |\n",
                                ms->name, p->points, splats, 1.0 / br.frame_s, br.bake_s, mib, br.bake_mib, rss,

@@ -22,7 +22,8 @@ unsigned sg_verify_part_parse(const char *name)
         const char *name;
         unsigned bit;
     } parts[] = {{"stability", SG_VERIFY_STABILITY}, {"surfaces", SG_VERIFY_SURFACES}, {"bake", SG_VERIFY_BAKE},
-                 {"scaling", SG_VERIFY_SCALING},     {"headline", SG_VERIFY_HEADLINE}, {"all", SG_VERIFY_ALL}};
+                 {"scaling", SG_VERIFY_SCALING},     {"headline", SG_VERIFY_HEADLINE}, {"gi", SG_VERIFY_GI},
+                 {"all", SG_VERIFY_ALL}};
     for (size_t i = 0; i < sizeof parts / sizeof parts[0]; i++)
         if (strcmp(name, parts[i].name) == 0)
             return parts[i].bit;
@@ -186,8 +187,10 @@ sg_status sg_verify_run(const sg_verify_desc *d, sg_verify_summary *summary, sg_
     sg_status st = SG_OK;
     if (c.d.parts & SG_VERIFY_STABILITY)
         st = sg_verify__stability(&c, err);
-    if (st == SG_OK && (c.d.parts & ~(unsigned)SG_VERIFY_STABILITY))
+    if (st == SG_OK && (c.d.parts & ~(unsigned)(SG_VERIFY_STABILITY | SG_VERIFY_GI)))
         st = sg_verify__sweeps(&c, err);
+    if (st == SG_OK && (c.d.parts & SG_VERIFY_GI))
+        st = sg_verify__gi(&c, err);
     sum.seconds = omp_get_wtime() - t0;
     if (st == SG_OK && summary)
         *summary = sum;

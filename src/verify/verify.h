@@ -32,8 +32,15 @@
  *              with the best bake configuration found by BAKE (the fastest
  *              with relMSE <= 0.01, else the most accurate): fps, bake
  *              time, memory, error.
+ *   GI         global illumination where it matters (verify/gi.c): concave
+ *              scans seen close up (Lucy, the dragon, the armadillo under
+ *              real maps; with `ci` the asset bunny), a ladder of bakes of
+ *              both indirect estimators as error against CPU time, the
+ *              budget against the reference, and the white furnace on the
+ *              same scans, pixel by pixel.
  * Output, in desc.out_dir: stability.csv, surfaces.csv, bake.csv,
- * scaling.csv, headline.csv, and stability.md, headline.md (each written
+ * scaling.csv, headline.csv, gi.csv, furnace.csv, and stability.md,
+ * headline.md, gi.md (each written
  * to a temporary name and renamed); one false-colour difference PNG per
  * measured run in desc.diff_dir. Charts are drawn from the CSV by
  * scripts/verify-charts.sh (gnuplot).
@@ -58,7 +65,8 @@ enum sg_verify_part {
     SG_VERIFY_BAKE = 1u << 2,
     SG_VERIFY_SCALING = 1u << 3,
     SG_VERIFY_HEADLINE = 1u << 4,
-    SG_VERIFY_ALL = 31u
+    SG_VERIFY_GI = 1u << 5,
+    SG_VERIFY_ALL = 63u
 };
 
 #define SG_VERIFY_MAX_SIZES 16
@@ -89,7 +97,7 @@ typedef struct sg_verify_summary {
 sg_status sg_verify_run(const sg_verify_desc *d, sg_verify_summary *summary, sg_error *err);
 
 /* The names of the parts, for option parsing ("stability", "surfaces",
- * "bake", "scaling", "headline"); 0 for an unknown name. */
+ * "bake", "scaling", "headline", "gi"); 0 for an unknown name. */
 unsigned sg_verify_part_parse(const char *name);
 
 #endif

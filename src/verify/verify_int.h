@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "bake/bake.h"
 #include "core/error.h"
 #include "io/image.h"
 #include "metrics/image_metrics.h"
@@ -16,8 +17,7 @@ typedef struct vctx {
     sg_verify_desc d;          /* defaults filled in                       */
     sg_verify_summary *sum;
     char best_config[128];     /* BAKE's pick for HEADLINE, "" = none yet  */
-    size_t best_photons, best_k;
-    int best_direct;
+    sg_bake_desc best_desc;    /* its parameters                           */
 } vctx;
 
 void sg_verify__log(const vctx *c, const char *fmt, ...)
@@ -55,5 +55,6 @@ double sg_verify__rss_mib(void);
 
 sg_status sg_verify__stability(vctx *c, sg_error *err);
 sg_status sg_verify__sweeps(vctx *c, sg_error *err);
+sg_status sg_verify__gi(vctx *c, sg_error *err);
 
 #endif

@@ -7,8 +7,11 @@
 #   2. every CSV has exactly the expected header, every expected row once,
 #      and a finite number in every numeric field;
 #   3. every stability row's status is "ok" and its NaN counts are 0;
-#   4. the four charts exist, are non-empty and start with the PNG signature;
-#   5. a second run of one case reads its reference from the cache.
+#   4. the five charts exist, are non-empty and start with the PNG signature;
+#   5. a second run of one case reads its reference from the cache;
+#   6. the GI part's white furnace on the (concave) bunny: with the default
+#      bake every covered pixel within 3% of 1 and the mean within 0.5%
+#      (the issue's bounds), while the photon estimator's frame is not.
 # usage: verify_ci.sh SPLATGI_VERIFY VERIFY_CHARTS_SH WORKDIR
 # Exit 77 (ctest: skipped) when gnuplot is absent (scripts/setup.sh installs it).
 set -u
@@ -73,17 +76,28 @@ for c in mls mls_no_refinements disk disk_r1.5; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
 done
-check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points,glossy,glossy_res,glossy_rays" "1"
+check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points,glossy,glossy_res,glossy_rays,estimator,gather_rays" "1,24"
 [ "$(rows "$OUT/bake.csv")" -eq 7 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 7"
 check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
 [ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
-check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise" "1"
+check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise,estimator,gather_rays" "1,21"
 [ "$(awk -F, 'NR > 1 { print $1 }' "$OUT/headline.csv")" = "bunny" ] || fail "headline.csv: want one bunny row"
 [ -s "$OUT/headline.md" ] || fail "no headline.md"
+# GI: the --ci close-up (the bunny), its two bakes and their furnaces.
+check_csv "$OUT/gi.csv" "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,model_pixels,ref_noise,ref_spp,image_size" "1,2,3"
+[ "$(awk -F, 'NR > 1 { printf "%s/%s ", $1, $2 }' "$OUT/gi.csv")" = "bunny_ci/transport bunny_ci/photons " ] ||
+  fail "gi.csv: want the bunny's transport and photons rows"
+check_csv "$OUT/furnace.csv" "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s" "1,2"
+awk -F, 'NR > 1 && $2 == "default" { n++; if ($5 < 0.97 || $6 > 1.03 || $4 < 0.995 || $4 > 1.005 || $3 < 100) {
+    print "furnace: " $0; bad = 1 } } END { exit bad || n != 1 }' "$OUT/furnace.csv" ||
+  fail "the default bake's furnace frame is not 1 within 3% per pixel and 0.5% on average"
+awk -F, 'NR > 1 && $2 == "photons" && $7 == 0 { bad = 1 } END { exit bad }' "$OUT/furnace.csv" ||
+  fail "the photon estimator's furnace frame shows no error: the check has no power"
+[ -s "$OUT/gi.md" ] || fail "no gi.md"
 awk -F, 'FNR > 1 && $0 ~ /,nan,|,inf,/ { bad = 1 } END { exit bad }' "$OUT"/*.csv || fail "nan or inf in a CSV"
 
 # Charts.
-for p in verify_surfaces verify_bake verify_scaling verify_stability; do
+for p in verify_surfaces verify_bake verify_scaling verify_stability verify_gi; do
   f=$OUT/$p.png
   [ -s "$f" ] || fail "$f missing or empty"
   sig=$(od -An -tx1 -N8 "$f" | tr -d ' \n')

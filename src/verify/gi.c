@@ -1,0 +1,462 @@
+/* gi.c — global illumination where it matters (verify.h: GI): concave scans
+ * seen close up, so that folds, creases and their inter-reflections fill
+ * the frame; the white furnace on the same scans; both indirect estimators
+ * side by side, over a ladder of settings, as error against CPU time.
+ *
+ * Scenes ("close-ups"): a scan sampled to CLOSEUP_POINTS points, its longest
+ * side SCENE_LENGTH units, standing on the built-in ground (albedo 0.5),
+ * Lambert albedo 0.7, under a real HDR map, seen by a fixed close camera
+ * (world units of that placement). With ci: the asset bunny under the sky.
+ *
+ * Per close-up:
+ *  - the world's build, timed as process CPU seconds (both threads);
+ *  - the converged reference at pixel centres (refcache.h), image x image
+ *    at spp paths, and the relMSE it owes to its own noise;
+ *  - every bake of the ladder (below): its CPU seconds, one frame x frame
+ *    lookup frame's CPU seconds, and its image x image frame against the
+ *    reference: relMSE over the frame and over the model's pixels (those
+ *    whose centre ray hits model 0), the model's energy ratio, p99, and the
+ *    share of the model's pixels within 3 of the reference's own standard
+ *    errors of it (luminance);
+ *  - the budget: the reference's paths per CPU second (a small render,
+ *    timed), hence the CPU seconds of one frame x frame reference frame as
+ *    accurate as the default bake (its noise relMSE falls as 1/spp), over
+ *    the default bake's + one lookup frame's CPU seconds;
+ *  - the white furnace: the scan alone (no ground), albedo 1, uniform sky
+ *    L = 1; every covered pixel of the lookup frame should be 1: mean,
+ *    smallest, largest, share beyond 3%.
+ * Output: gi.csv, furnace.csv, gi.md in out_dir; difference images in
+ * diff_dir; scripts/verify-charts.sh draws verify_gi.png from gi.csv.
+ *
+ * Invariants:
+ *  1. every bake of a close-up is compared with the same reference;
+ *  2. CPU times are process CPU time (clock_gettime), so another process's
+ *     load does not inflate them (it can still slow memory);
+ *  3. a row is written for every bake asked for; a failed call stops the
+ *     part with its message.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bake/bake.h"
+#include "io/mesh.h"
+#include "io/scene_file.h"
+#include "metrics/image_metrics.h"
+#include "ref/pathtrace.h"
+#include "render/camera.h"
+#include "render/world.h"
+#include "verify/refcache.h"
+#include "verify/verify_int.h"
+
+#define SCENE_LENGTH 10.0f
+#define CLOSEUP_POINTS 250000
+#define MODEL_ALBEDO 0.7
+#define GROUND_ALBEDO 0.5
+
+typedef struct closeup {
+    const char *name;
+    const char *mesh;        /* under data_dir; NULL: the built-in bunny  */
+    const char *env;         /* under data_dir; NULL: the built-in sky    */
+    float eye[3], look[3], fov;
+} closeup;
+
+static const char COURTYARD[] = "envmaps/blender_studiolights/courtyard.exr";
+static const char VENICE[] = "envmaps/threejs_equirect/venice_sunset_1k.hdr";
+
+static const closeup closeups[] = {
+    {"lucy_torso", "meshes/lucy/Lucy100k.ply", COURTYARD, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f},
+    {"lucy_sunset", "meshes/lucy/Lucy100k.ply", VENICE, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f},
+    {"dragon_head", "meshes/stanford_dragon/dragon_vrip.ply", COURTYARD, {1.5f, 6.5f, 7.5f}, {-2.8f, 4.2f, 0.0f},
+     32.0f},
+    {"armadillo_chest", "meshes/armadillo/armadillo_50k.obj", COURTYARD, {1.5f, 6.8f, -6.5f}, {0.0f, 6.2f, 0.0f},
+     38.0f},
+};
+static const closeup ci_closeup = {"bunny_ci", NULL, NULL, {4.0f, 6.0f, 9.0f}, {0.5f, 4.5f, 0.0f}, 40.0f};
+
+/* The ladder of bakes: a point of the error-against-time chart each. */
+typedef struct rung {
+    const char *label;
+    sg_bake_indirect indirect;
+    float spacing;           /* sg_bake_desc.sample_spacing (0: default)  */
+    int env_rays, cos_rays;  /* direct_samples, gather_rays               */
+    size_t photons;          /* photon estimator                           */
+    int is_default;          /* the library's defaults: the budget's bake */
+} rung;
+
+static const rung ladder[] = {
+    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0},
+    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 1},
+    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0},
+    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0},
+    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0},
+    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0},
+    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0},
+    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0},
+    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0},
+};
+static const rung ci_ladder[] = {
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 1},
+    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0},
+};
+
+typedef struct gplan {
+    size_t points;
+    int image, frame, spp, budget_side, budget_spp;
+} gplan;
+
+static gplan make_plan(const vctx *c)
+{
+    if (c->d.ci)
+        return (gplan){.points = 5000, .image = 24, .frame = 32, .spp = 16, .budget_side = 16, .budget_spp = 2};
+    return (gplan){.points = CLOSEUP_POINTS, .image = 128, .frame = 512, .spp = 4096, .budget_side = 64,
+                   .budget_spp = 16};
+}
+
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double lum(const float *p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]; }
+
+/* The scene file of a close-up: its scan placed on the ground (ground 0:
+ * the scan alone), materials of albedo `albedo`, the map or a uniform
+ * sky of radiance 1 (furnace). */
+static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int furnace, sg_scene_file *sf,
+                            sg_world **w, double *cpu_s, sg_error *err)
+{
+    char model[5000], env[5000], json[12000], mesh[4400];
+    double albedo = furnace ? 1.0 : MODEL_ALBEDO;
+    if (cu->mesh) {
+        snprintf(mesh, sizeof mesh, "%s/%s", c->d.data_dir, cu->mesh);
+        sg_aabb b;
+        sg_ground_placement pl;
+        sg_status st = sg_mesh_read_bounds(mesh, &b, err);
+        if (st != SG_OK)
+            return st;
+        if ((st = sg_mesh_ground_placement(b, SCENE_LENGTH, &pl, err)) != SG_OK)
+            return st;
+        snprintf(model, sizeof model,
+                 "{\"path\": \"%s\", \"points\": %zu, \"transform\": {\"translate\": [%.9g, %.9g, %.9g], "
+                 "\"scale\": %.9g}, \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], "
+                 "\"use_point_colors\": false}}",
+                 mesh, points, (double)pl.translate.x, (double)pl.translate.y, (double)pl.translate.z,
+                 (double)pl.scale, albedo, albedo, albedo);
+    } else {
+        snprintf(model, sizeof model,
+                 "{\"builtin\": \"bunny\", \"points\": %zu, \"material\": {\"type\": \"lambert\", \"albedo\": "
+                 "[%g, %g, %g], \"use_point_colors\": false}}",
+                 points, albedo, albedo, albedo);
+    }
+    if (furnace)
+        snprintf(env, sizeof env, "{\"builtin\": \"uniform\", \"radiance\": [1, 1, 1]}");
+    else if (cu->env)
+        snprintf(env, sizeof env, "{\"path\": \"%s/%s\"}", c->d.data_dir, cu->env);
+    else
+        snprintf(env, sizeof env, "{\"builtin\": \"sky\"}");
+    char ground[256] = "";
+    if (!furnace)
+        snprintf(ground, sizeof ground,
+                 ", {\"builtin\": \"ground\", \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], "
+                 "\"use_point_colors\": false}}",
+                 GROUND_ALBEDO, GROUND_ALBEDO, GROUND_ALBEDO);
+    int n = snprintf(json, sizeof json,
+                     "{\"models\": [%s%s], \"envmap\": %s, \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, "
+                     "%.9g], \"look\": [%.9g, %.9g, %.9g], \"fov_deg\": %g}], \"render\": {\"max_depth\": %d}}",
+                     model, ground, env, (double)cu->eye[0], (double)cu->eye[1], (double)cu->eye[2],
+                     (double)cu->look[0], (double)cu->look[1], (double)cu->look[2], (double)cu->fov,
+                     furnace ? 1024 : 8);
+    if (n < 0 || (size_t)n >= sizeof json)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: scene JSON too long (paths?)", cu->name);
+    sg_status st = sg_scene_file_parse(json, (size_t)n, cu->name, NULL, sf, err);
+    if (st != SG_OK)
+        return st;
+    double t0 = cpu_now();
+    st = sg_world_create(sf, w, err);
+    *cpu_s = cpu_now() - t0;
+    if (st != SG_OK)
+        sg_scene_file_free(sf);
+    return st;
+}
+
+static sg_camera closeup_camera(const closeup *cu)
+{
+    sg_camera cam;
+    sg_camera_look_at(sg_v3(cu->eye[0], cu->eye[1], cu->eye[2]), sg_v3(cu->look[0], cu->look[1], cu->look[2]),
+                      sg_v3(0, 1, 0), cu->fov, 1.0f, &cam, NULL);
+    return cam;
+}
+
+/* Per pixel of an n x n frame: 1 where the centre ray hits model 0. */
+static sg_status model_mask(const sg_world *w, const sg_camera *cam, int n, unsigned char **out, sg_error *err)
+{
+    unsigned char *mask = calloc((size_t)n * (size_t)n, 1);
+    if (!mask)
+        return sg_error_set(err, SG_ERR_NOMEM, "out of memory");
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, n, n);
+            sg_world_hit h;
+            mask[(size_t)y * (size_t)n + (size_t)x] = sg_world_intersect(w, &r, &h, NULL) && h.model == 0;
+        }
+    *out = mask;
+    return SG_OK;
+}
+
+typedef struct bake_figs {
+    double bake_cpu, frame_cpu, rel_mse, rel_mse_model, energy_model, p99, within3;
+    size_t model_pixels;
+} bake_figs;
+
+/* One bake of the ladder against the reference. */
+static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const sg_camera *cam,
+                          const rung *r, const sg_ref_result *ref, const unsigned char *mask, bake_figs *f,
+                          sg_error *err)
+{
+    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .direct_samples = r->env_rays,
+                       .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake *b = NULL;
+    double t0 = cpu_now();
+    sg_status st = sg_bake_create(w, &bd, &b, err);
+    if (st != SG_OK)
+        return st;
+    f->bake_cpu = cpu_now() - t0;
+    sg_image frame = {0}, img = {0};
+    sg_bake_frame_desc fd = {.camera = *cam, .width = p->frame, .height = p->frame};
+    t0 = cpu_now();
+    st = sg_bake_render(b, w, &fd, &frame, NULL, err);
+    f->frame_cpu = cpu_now() - t0;
+    sg_image_free(&frame);
+    fd.width = fd.height = p->image;
+    if (st == SG_OK)
+        st = sg_bake_render(b, w, &fd, &img, NULL, err);
+    sg_bake_destroy(b);
+    if (st != SG_OK)
+        return st;
+    char name[200];
+    snprintf(name, sizeof name, "gi_%s_%s", cu->name, r->label);
+    for (char *q = name; *q; ++q)
+        if (*q == ' ' || *q == '+')
+            *q = '_';
+    sg_image_metrics m;
+    st = sg_verify__compare(c, &img, &ref->mean, name, &m, err);
+    if (st == SG_OK) {
+        f->rel_mse = m.rel_mse;
+        f->p99 = m.p99_rel_error;
+        double sa = 0, sb = 0, rel = 0, eps = m.epsilon;
+        size_t n = 0, in3 = 0;
+        for (size_t i = 0; i < (size_t)p->image * (size_t)p->image; ++i) {
+            if (!mask[i])
+                continue;
+            const float *a = img.data + 3 * i, *bb = ref->mean.data + 3 * i, *se = ref->std_error.data + 3 * i;
+            double la = lum(a), lb = lum(bb);
+            sa += la;
+            sb += lb;
+            for (int ch = 0; ch < 3; ++ch)
+                rel += ((double)a[ch] - bb[ch]) * ((double)a[ch] - bb[ch]) / ((double)bb[ch] * bb[ch] + eps) / 3.0;
+            in3 += fabs(la - lb) <= 3.0 * lum(se);
+            ++n;
+        }
+        f->model_pixels = n;
+        f->rel_mse_model = n ? rel / (double)n : 0.0;
+        f->energy_model = sb > 0 ? sa / sb : 0.0;
+        f->within3 = n ? (double)in3 / (double)n : 0.0;
+    }
+    sg_image_free(&img);
+    return st;
+}
+
+/* The reference path tracer's paths per CPU second on this scene: a small
+ * render at pixel centres, timed. */
+static sg_status ref_rate(const gplan *p, const sg_world *w, const sg_camera *cam, double *paths_per_cpu_s,
+                          sg_error *err)
+{
+    sg_ref_desc rd = {.camera = *cam, .width = p->budget_side, .height = p->budget_side, .spp = p->budget_spp,
+                      .max_depth = 8, .seed = 77, .pixel_centres = 1};
+    sg_ref_result r = {0};
+    double t0 = cpu_now();
+    sg_status st = sg_ref_render(w, &rd, &r, err);
+    double cpu = cpu_now() - t0;
+    if (st == SG_OK)
+        *paths_per_cpu_s = cpu > 0 ? (double)r.paths / cpu : 0.0;
+    sg_ref_result_free(&r);
+    return st;
+}
+
+/* The white furnace on the scan alone: every covered pixel should be 1. */
+static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const rung *r, vtable *t, vtable *md,
+                         sg_error *err)
+{
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    double world_cpu = 0;
+    sg_status st = make_world(c, cu, p->points, 1, &sf, &w, &world_cpu, err);
+    if (st != SG_OK)
+        return st;
+    sg_camera cam = closeup_camera(cu);
+    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .direct_samples = r->env_rays,
+                       .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake *b = NULL;
+    sg_image img = {0};
+    double t0 = cpu_now();
+    if ((st = sg_bake_create(w, &bd, &b, err)) == SG_OK) {
+        double bake_cpu = cpu_now() - t0;
+        sg_bake_frame_desc fd = {.camera = cam, .width = p->image, .height = p->image};
+        if ((st = sg_bake_render(b, w, &fd, &img, NULL, err)) == SG_OK) {
+            double sum = 0, lo = INFINITY, hi = -INFINITY;
+            size_t n = 0, out3 = 0;
+            for (int y = 0; y < p->image; ++y)
+                for (int x = 0; x < p->image; ++x) {
+                    sg_ray ray = sg_camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, p->image, p->image);
+                    sg_world_hit h;
+                    if (!sg_world_intersect(w, &ray, &h, NULL))
+                        continue;
+                    double v = lum(img.data + 3 * ((size_t)y * (size_t)p->image + (size_t)x));
+                    sum += v;
+                    lo = v < lo ? v : lo;
+                    hi = v > hi ? v : hi;
+                    out3 += fabs(v - 1.0) > 0.03;
+                    ++n;
+                }
+            double mean = n ? sum / (double)n : 0.0;
+            sg_verify__tprintf(t, "%s,%s,%zu,%.6f,%.6f,%.6f,%.6f,%.3f\n", cu->name, r->label, n, mean, lo, hi,
+                               n ? (double)out3 / (double)n : 0.0, bake_cpu);
+            t->rows++;
+            sg_verify__tprintf(md, "| %s | %s | %zu | %.4f | %.4f | %.4f | %.2f%% | %.1f |\n", cu->name, r->label, n,
+                               mean, lo, hi, n ? 100.0 * (double)out3 / (double)n : 0.0, bake_cpu);
+            sg_verify__log(c, "  furnace %-16s %-10s mean %.4f, pixels [%.4f, %.4f], %.2f%% beyond 3%%\n", cu->name,
+                           r->label, mean, lo, hi, n ? 100.0 * (double)out3 / (double)n : 0.0);
+        }
+        sg_bake_destroy(b);
+    }
+    sg_image_free(&img);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+    return st;
+}
+
+sg_status sg_verify__gi(vctx *c, sg_error *err)
+{
+    gplan p = make_plan(c);
+    const closeup *list = c->d.ci ? &ci_closeup : closeups;
+    int nscenes = c->d.ci ? 1 : (int)(sizeof closeups / sizeof closeups[0]);
+    const rung *rungs = c->d.ci ? ci_ladder : ladder;
+    int nrungs = c->d.ci ? (int)(sizeof ci_ladder / sizeof ci_ladder[0]) : (int)(sizeof ladder / sizeof ladder[0]);
+    vtable t = {0}, ft = {0}, md = {0}, fmd = {0}, bmd = {0};
+    sg_verify__tprintf(&t, "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,"
+                           "frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,"
+                           "model_pixels,ref_noise,ref_spp,image_size\n");
+    sg_verify__tprintf(&ft, "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s\n");
+    sg_verify__tprintf(&md, "Close-ups of concave scans (%zu points each, on the ground), %dx%d lookup frame "
+                            "against a %d-spp reference at pixel centres; CPU seconds of both threads; model: "
+                            "the pixels of the scan.\n\n| scene | bake | bake CPU s | relMSE | relMSE model | "
+                            "energy model | p99 | within ref. 3 sigma |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+                       p.points, p.image, p.image, p.spp);
+    sg_verify__tprintf(&fmd, "\nWhite furnace (the scan alone, albedo 1, uniform sky L = 1, %dx%d): every pixel "
+                             "should be 1.\n\n| scene | bake | pixels | mean | smallest | largest | beyond 3%% | "
+                             "bake CPU s |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+                       p.image, p.image);
+    sg_verify__tprintf(&bmd, "\nBudget: the default bake + one %dx%d lookup frame against one %dx%d reference frame "
+                             "as accurate (CPU seconds; the reference's noise relMSE falls as 1/spp from its "
+                             "%d-spp value).\n\n| scene | bake + frame CPU s | relMSE | reference spp for it | "
+                             "reference frame CPU s | ratio |\n|---|---:|---:|---:|---:|---:|\n",
+                       p.frame, p.frame, p.frame, p.frame, p.spp);
+    sg_status st = SG_OK;
+    for (int s = 0; s < nscenes && st == SG_OK; ++s) {
+        const closeup *cu = &list[s];
+        if (cu->mesh) {
+            char path[4400];
+            snprintf(path, sizeof path, "%s/%s", c->d.data_dir, cu->mesh);
+            if (access(path, R_OK) != 0) {
+                sg_verify__log(c, "gi: %s not found: %s skipped\n", path, cu->name);
+                continue;
+            }
+        }
+        sg_scene_file sf = {0};
+        sg_world *w = NULL;
+        double world_cpu = 0;
+        if ((st = make_world(c, cu, p.points, 0, &sf, &w, &world_cpu, err)) != SG_OK)
+            break;
+        sg_camera cam = closeup_camera(cu);
+        sg_verify__log(c, "gi: %s, world %.1f CPU s\n", cu->name, world_cpu);
+        sg_verify_ref_desc rd = {.camera = cam, .width = p.image, .height = p.image, .spp = p.spp,
+                                 .max_depth = 8, .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(&sf)};
+        sg_ref_result ref = {0};
+        int cached = 0;
+        double noise = 0, rate = 0;
+        unsigned char *mask = NULL;
+        st = sg_verify_reference(w, &rd, &ref, &cached, NULL, 0, err);
+        if (st == SG_OK)
+            st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &noise, err);
+        if (st == SG_OK)
+            st = model_mask(w, &cam, p.image, &mask, err);
+        if (st == SG_OK)
+            st = ref_rate(&p, w, &cam, &rate, err);
+        if (st == SG_OK)
+            sg_verify__log(c, "  reference %d spp%s, own noise relMSE %.2g; %.0f paths per CPU s\n", p.spp,
+                           cached ? " (cached)" : "", noise, rate);
+        for (int k = 0; k < nrungs && st == SG_OK; ++k) {
+            const rung *r = &rungs[k];
+            bake_figs f = {0};
+            if ((st = run_rung(c, &p, cu, w, &cam, r, &ref, mask, &f, err)) != SG_OK)
+                break;
+            double total = world_cpu + f.bake_cpu + f.frame_cpu;
+            sg_verify__tprintf(&t, "%s,%s,%s,%g,%d,%d,%zu,%zu,%.3f,%.3f,%.4f,%d,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%zu,"
+                                   "%.3g,%d,%d\n",
+                               cu->name, r->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", r->label,
+                               (double)r->spacing, r->env_rays, r->cos_rays, r->photons, p.points, world_cpu,
+                               f.bake_cpu, f.frame_cpu, p.frame, total, f.rel_mse, f.rel_mse_model, f.energy_model,
+                               f.p99, f.within3, f.model_pixels, noise, p.spp, p.image);
+            t.rows++;
+            sg_verify__tprintf(&md, "| %s | %s | %.1f | %.5f | %.5f | %.4f | %.3f | %.3f |\n", cu->name, r->label,
+                               f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
+            sg_verify__log(c, "  %-12s bake %6.1f CPU s, relMSE %.5f (model %.5f), energy %.4f, p99 %.3f, in 3 "
+                              "sigma %.3f\n",
+                           r->label, f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
+            if (r->is_default && rate > 0 && f.rel_mse > 0) {
+                double spp = noise * (double)p.spp / f.rel_mse;
+                double ref_cpu = spp * (double)p.frame * (double)p.frame / rate, ours = f.bake_cpu + f.frame_cpu;
+                sg_verify__tprintf(&bmd, "| %s | %.1f | %.5f | %.0f | %.1f | %.1f |\n", cu->name, ours, f.rel_mse, spp,
+                                   ref_cpu, ref_cpu / ours);
+                sg_verify__log(c, "  budget: bake + frame %.1f CPU s; the reference needs %.0f spp, %.1f CPU s: "
+                                  "%.1fx\n",
+                               ours, spp, ref_cpu, ref_cpu / ours);
+            }
+        }
+        free(mask);
+        sg_ref_result_free(&ref);
+        sg_world_destroy(w);
+        sg_scene_file_free(&sf);
+        if (st != SG_OK)
+            break;
+        /* The furnace, with the default bake and the photon estimator's. */
+        for (int k = 0; k < nrungs && st == SG_OK; ++k)
+            if (rungs[k].is_default || (rungs[k].indirect == SG_BAKE_INDIRECT_PHOTONS && !strcmp(rungs[k].label,
+                                                                                                 c->d.ci ? "photons"
+                                                                                                         : "1M photons")))
+                st = furnace(c, &p, cu, &rungs[k], &ft, &fmd, err);
+    }
+    if (st == SG_OK)
+        st = sg_verify__twrite(&t, c->d.out_dir, "gi.csv", err);
+    if (st == SG_OK)
+        st = sg_verify__twrite(&ft, c->d.out_dir, "furnace.csv", err);
+    if (st == SG_OK) {
+        sg_verify__tprintf(&md, "%s%s", fmd.buf ? fmd.buf : "", bmd.buf ? bmd.buf : "");
+        st = sg_verify__twrite(&md, c->d.out_dir, "gi.md", err);
+    }
+    c->sum->rows += t.rows + ft.rows;
+    sg_verify__tfree(&t);
+    sg_verify__tfree(&ft);
+    sg_verify__tfree(&md);
+    sg_verify__tfree(&fmd);
+    sg_verify__tfree(&bmd);
+    return st;
+}
