@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "io/image.h"
 #include "io/scene_file.h"
 #include "render/world.h"
 
@@ -63,11 +64,87 @@ static void test_world_albedo_of_builtins(void **state)
     sg_world_destroy(w);
 }
 
+typedef struct events {
+    int stages, notes;
+    char text[4096]; /* all messages, one a line */
+} events;
+
+static void on_event(void *user, sg_world_event kind, const char *message)
+{
+    events *e = user;
+    if (kind == SG_WORLD_STAGE)
+        e->stages++;
+    else
+        e->notes++;
+    size_t n = strlen(e->text);
+    snprintf(e->text + n, sizeof e->text - n, "%s %s\n", kind == SG_WORLD_STAGE ? "stage" : "note", message);
+}
+
+/* A scan with stray points, Z-up, under a map with NaN texels: the world
+ * says what it is doing (a stage per model step and the map) and what it
+ * changed (capped radii, zeroed texels) with counts; the Z-up grid lies
+ * flat. */
+static void test_world_progress_notes_and_up_axis(void **state)
+{
+    (void)state;
+    char xyz[64 * 1024];
+    size_t n = 0;
+    for (int i = 0; i < 40; ++i) /* a 40 x 40 grid in the XY plane: the floor of a Z-up scan */
+        for (int j = 0; j < 40; ++j)
+            n += (size_t)snprintf(xyz + n, sizeof xyz - n, "%g %g 0\n", 0.05 * i, 0.05 * j);
+    n += (size_t)snprintf(xyz + n, sizeof xyz - n, "30 30 0\n-30 5 0\n");
+    const char *scan = sg_test_write_file("floor.xyz", xyz, n);
+    sg_image img = {0};
+    assert_int_equal(sg_image_alloc(&img, 8, 4, NULL), SG_OK);
+    for (int t = 0; t < 3 * 32; ++t)
+        img.data[t] = 1.0f;
+    img.data[0] = NAN;
+    img.data[10] = INFINITY;
+    char map[700];
+    snprintf(map, sizeof map, "%s/nan_texels.exr", sg_test_tmpdir());
+    sg_error err = {0};
+    assert_int_equal(sg_image_write_exr(&img, map, &err), SG_OK);
+    sg_image_free(&img);
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"models\": [{\"path\": \"%s\", \"transform\": {\"up\": \"z\"}}], \"envmap\": {\"path\": \"%s\"}}",
+             scan, map);
+    sg_scene_file sf;
+    assert_int_equal(sg_scene_file_parse(json, strlen(json), "t.json", NULL, &sf, &err), SG_OK);
+    events ev = {0};
+    sg_world_desc d = {.on_event = on_event, .user = &ev};
+    sg_world *w = NULL;
+    if (sg_world_create_desc(&sf, &d, &w, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    print_message("%s", ev.text);
+    assert_int_equal(ev.stages, 3);
+    assert_int_equal(ev.notes, 2);
+    assert_non_null(strstr(ev.text, "stage model 1 of 1 (floor.xyz): making splats"));
+    assert_non_null(strstr(ev.text, "stage model 1 of 1 (floor.xyz): building the MLS surface of 1602 splats"));
+    assert_non_null(strstr(ev.text, "note $.models[0] (floor.xyz): 2 of 1602 splat radii were over 8 x the median"));
+    assert_non_null(strstr(ev.text, "nan_texels.exr: 2 of 8 x 4 texels held NaN or infinite values and were set to 0"));
+    sg_world_destroy(w);
+    /* drop_outliers: the two strays go, and the note says so. */
+    sf.models[0].points.drop_outliers = true;
+    memset(&ev, 0, sizeof ev);
+    assert_int_equal(sg_world_create_desc(&sf, &d, &w, &err), SG_OK);
+    assert_non_null(strstr(ev.text, "dropped 2 stray points"));
+    assert_non_null(strstr(ev.text, "of 1600 splats"));
+    /* The floor of the Z-up scan lies flat (bounds include splat radii). */
+    sg_aabb b = sg_world_bounds(w);
+    if (!(b.hi.y - b.lo.y < 0.3f) || !(b.hi.z - b.lo.z > 1.9f) || !(b.hi.z <= 0.2f))
+        fail_msg("Z-up floor should lie flat in y = 0, z <= 0: bounds y [%g, %g], z [%g, %g]", (double)b.lo.y,
+                 (double)b.hi.y, (double)b.lo.z, (double)b.hi.z);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_world_albedo_of_mesh_without_colours),
         cmocka_unit_test(test_world_albedo_of_builtins),
+        cmocka_unit_test(test_world_progress_notes_and_up_axis),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
