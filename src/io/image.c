@@ -35,6 +35,7 @@
 #include <png.h>
 
 #include "core/alloc.h"
+#include "core/file_mode.h"
 
 sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err)
 {
@@ -112,12 +113,13 @@ static void discard_temp(temp_file *t)
     t->name = NULL;
 }
 
-/* The temporary file is complete and closed (t->fd == -1): give it ordinary
- * permissions (mkstemp makes 0600) and move it over path. */
+/* The temporary file is complete and closed (t->fd == -1): give it the
+ * mode every output gets (core/file_mode.h; mkstemp makes 0600) and move
+ * it over path. */
 static sg_status finish_temp(temp_file *t, const char *path, sg_error *err)
 {
     assert(t->fd < 0 && t->name);
-    if (chmod(t->name, 0644) != 0 || rename(t->name, path) != 0) {
+    if (chmod(t->name, sg_output_file_mode(path)) != 0 || rename(t->name, path) != 0) {
         int e = errno;
         discard_temp(t);
         return sg_error_set(err, SG_ERR_IO, "%s: cannot move the finished file into place: %s",
