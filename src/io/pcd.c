@@ -14,6 +14,7 @@
  */
 #include "io/pcd.h"
 
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdint.h>
@@ -466,5 +467,24 @@ fail:
     sg_mesh_free(&m);
     sg_free(h);
     sg_free(buf);
+    return st;
+}
+
+sg_status sg_pcd_read_count(const char *path, uint64_t *points, sg_error *err)
+{
+    enum { PEEK = 1 << 16 }; /* a header is a few hundred bytes */
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return sg_error_set(err, SG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    char *buf = sg_alloc_array(PEEK, 1);
+    pcd_header *h = sg_calloc_array(1, sizeof *h);
+    sg_status st = SG_OK;
+    if (!buf || !h)
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for the header", path);
+    else if ((st = parse_header(path, buf, fread(buf, 1, PEEK, f), h, err)) == SG_OK)
+        *points = h->points;
+    sg_free(h);
+    sg_free(buf);
+    fclose(f);
     return st;
 }

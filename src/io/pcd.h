@@ -37,9 +37,14 @@
 #ifndef SG_IO_PCD_H
 #define SG_IO_PCD_H
 
+#include <stdint.h>
+
 #include "core/error.h"
 #include "io/mesh.h"
 
 sg_status sg_pcd_read(const char *path, sg_mesh *out, sg_error *err);
+
+/* POINTS of the header, reading the header alone (for memory estimates). */
+sg_status sg_pcd_read_count(const char *path, uint64_t *points, sg_error *err);
 
 #endif

@@ -29,6 +29,7 @@
  */
 #include "io/ply.h"
 
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdint.h>
@@ -1007,5 +1008,42 @@ fail:
     sg_free(pl);
     sg_free(h);
     sg_free(buf);
+    return st;
+}
+
+/* ---- header only ------------------------------------------------------- */
+
+/* Headers are a few hundred bytes; 1 MiB holds any real one. */
+#define HEADER_PEEK_BYTES (1u << 20)
+
+sg_status sg_ply_read_counts(const char *path, uint64_t *vertices, uint64_t *faces, sg_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return sg_error_set(err, SG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    char *buf = sg_alloc_array(HEADER_PEEK_BYTES + 1, 1);
+    ply_header *h = sg_calloc_array(1, sizeof *h);
+    sg_status st = SG_OK;
+    if (!buf || !h) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for the header", path);
+        goto done;
+    }
+    size_t n = fread(buf, 1, HEADER_PEEK_BYTES, f);
+    buf[n] = '\0';
+    if ((st = parse_header(path, buf, n, h, err)) != SG_OK)
+        goto done;
+    uint64_t v = 0, t = 0;
+    for (size_t i = 0; i < h->elem_count; i++) {
+        if (strcmp(h->elems[i].name, "vertex") == 0)
+            v = h->elems[i].count;
+        else if (strcmp(h->elems[i].name, "face") == 0 || strcmp(h->elems[i].name, "tristrips") == 0)
+            t += h->elems[i].count;
+    }
+    *vertices = v;
+    *faces = t;
+done:
+    sg_free(h);
+    sg_free(buf);
+    fclose(f);
     return st;
 }

@@ -53,6 +53,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "io/mesh.h"
@@ -60,6 +61,11 @@
 /* Reads the PLY file at path into *out (arrays from sg_alloc_array; release
  * with sg_mesh_free). */
 sg_status sg_ply_read(const char *path, sg_mesh *out, sg_error *err);
+
+/* The vertex count and the face + tristrips record count its header
+ * declares, reading the header alone (the first MiB at most): what a
+ * memory estimate needs before loading. Errors as sg_ply_read's header. */
+sg_status sg_ply_read_counts(const char *path, uint64_t *vertices, uint64_t *faces, sg_error *err);
 
 /* Helpers shared by the model loaders (ply.c, obj.c; defined in mesh.c).
  * Not meant for use outside src/io. */

@@ -205,6 +205,14 @@ sg_status sg_scene_file_parse(const char *text, size_t len, const char *name, co
 /* Frees everything and zeroes *sf; NULL and zeroed structs are fine. */
 void sg_scene_file_free(sg_scene_file *sf);
 
+/* Writes sf as a scene file that loads back to the same scene (equal
+ * sg_scene_file_hash over every part), every key spelt out so a user sees
+ * what can be edited; model and envmap paths made absolute (realpath) so
+ * the file may live anywhere. Written to a temporary name and renamed
+ * (core/file_mode.h permissions). SG_ERR_IO names path; SG_ERR_NOMEM.
+ * (scene_file_write.c) */
+sg_status sg_scene_file_write(const sg_scene_file *sf, const char *path, sg_error *err);
+
 /* The camera called name, or NULL. */
 const sg_scene_camera *sg_scene_file_find_camera(const sg_scene_file *sf, const char *name);
 
