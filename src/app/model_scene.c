@@ -82,6 +82,8 @@ sg_status sg_model_scene_make(const sg_model_scene_desc *d, sg_scene_file *out, 
         box = sg_aabb_grow(box, sg_scene_up_apply(d->up, p));
     }
     const int has_colors = mesh.colors != NULL;
+    /* The model's splats: mesh samples, or a cloud's own points. */
+    const size_t splats = mesh.triangle_count ? (d->points ? d->points : 250000) : mesh.vertex_count;
     sg_mesh_free(&mesh);
     sg_vec3 ext = sg_v3_sub(box.hi, box.lo);
     float size = fmaxf(ext.x, fmaxf(ext.y, ext.z));
@@ -114,6 +116,10 @@ sg_status sg_model_scene_make(const sg_model_scene_desc *d, sg_scene_file *out, 
     sg_scene_model *g = &sf.models[1];
     model_defaults(g);
     g->kind = SG_SCENE_MODEL_GROUND;
+    /* As dense as the model, roughly: the default scene's ratio (90k
+     * ground points to 250k bunny samples), within [1e4, 3.6e5]. */
+    double gp = 0.36 * (double)splats;
+    g->points.points = gp < 1e4 ? 10000 : gp > 3.6e5 ? 360000 : (size_t)gp;
     float s = GROUND_OVER_MODEL * size / GROUND_SIDE;
     g->transform.scale = sg_v3(s, s, s);
     g->material.albedo = sg_v3(0.5f, 0.5f, 0.5f);

@@ -47,7 +47,7 @@ namespace {
 
 /* Frees the image on every exit that did not hand it over (invariant 2). */
 struct image_guard {
-    sg_image img = {0, 0, nullptr};
+    sg_image img = {0, 0, nullptr, nullptr};
     ~image_guard() { sg_image_free(&img); }
 };
 
@@ -252,7 +252,7 @@ sg_status read_exr(const char *path, sg_image *out, sg_exr_read_info *info, sg_e
                       compression_name(hdr.compression()));
     }
     *out = g.img; /* invariant 2: ownership moves to the caller */
-    g.img = sg_image{0, 0, nullptr};
+    g.img = sg_image{0, 0, nullptr, nullptr};
     return SG_OK;
 }
 

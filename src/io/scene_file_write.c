@@ -21,11 +21,16 @@
 
 #include "core/file_mode.h"
 
-/* A float as a JSON number that reads back to the same float. */
+/* A float as the shortest JSON number that reads back to the same float
+ * (0.8, not 0.800000012). */
 static cJSON *num(float f)
 {
     char buf[32];
-    snprintf(buf, sizeof buf, "%.9g", (double)f);
+    for (int digits = 6; digits <= 9; ++digits) {
+        snprintf(buf, sizeof buf, "%.*g", digits, (double)f);
+        if ((float)strtod(buf, NULL) == f)
+            break;
+    }
     return cJSON_CreateRaw(buf);
 }
 

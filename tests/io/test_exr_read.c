@@ -271,7 +271,7 @@ static void test_exr_read_real_files(void **state)
 
 static void read_fails(const char *path, const char *name, sg_status want1, sg_status want2)
 {
-    sg_image img = {7, 9, (float *)&img}; /* sentinel: must stay */
+    sg_image img = {7, 9, (float *)&img, NULL}; /* sentinel: must stay */
     sg_exr_read_info info = {.tiled = 42};
     sg_error err = {0};
     sg_status st = sg_exr_read(path, &img, &info, &err);
