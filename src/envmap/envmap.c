@@ -373,27 +373,56 @@ sg_vec3 sg_envmap_mean_radiance(const sg_envmap *m)
 sg_vec3 sg_envmap_irradiance(const sg_envmap *m, sg_vec3 n)
 {
     assert(m);
-    enum { SUB = 4 }; /* subcells per texel side: see the header's error bound */
-    const int W = m->width, H = m->height;
+    enum { SUB = 4, BLOCK = 512 }; /* subcells per texel side (header's bound); subcolumns a block */
+    const int W = m->width, H = m->height, SW = SUB * W;
     sg_vec3 nm = sg_v3_normalize(to_map(m, n));
     double sum[3] = {0, 0, 0};
-    for (int j = 0; j < H; j++) {
-        double c0 = m->row_cos[j], c1 = m->row_cos[j + 1];
-        double d_omega = (c0 - c1) * (2.0 * SG_PI / W) / (SUB * SUB); /* per subcell */
-        for (int i = 0; i < W; i++) {
+    /* Subcolumns in blocks, each block's cos and sin of phi and bilinear
+     * neighbours in u (bilerp's rule, wrapping) computed once for all rows. */
+    double cs[BLOCK][2];
+    int col[BLOCK][2];
+    float cw[BLOCK];
+    for (int k0 = 0; k0 < SW; k0 += BLOCK) {
+        int nk = SW - k0 < BLOCK ? SW - k0 : BLOCK;
+        for (int b = 0; b < nk; b++) {
+            double uu = ((double)(k0 + b) + 0.5) / SW, phi = 2.0 * SG_PI * (uu - 0.5);
+            cs[b][0] = cos(phi);
+            cs[b][1] = sin(phi);
+            float x = (float)uu * (float)W - 0.5f, fx = floorf(x);
+            int i0 = (int)fx;
+            col[b][0] = i0 < 0 ? i0 + W : i0;
+            col[b][1] = i0 + 1 >= W ? i0 + 1 - W : i0 + 1;
+            cw[b] = x - fx;
+        }
+        for (int j = 0; j < H; j++) {
+            double c0 = m->row_cos[j], c1 = m->row_cos[j + 1];
+            double d_omega = (c0 - c1) * (2.0 * SG_PI / W) / (SUB * SUB); /* per subcell */
             for (int sj = 0; sj < SUB; sj++) {
                 double c = c0 + (c1 - c0) * (sj + 0.5) / SUB;
-                double s = sqrt(fmax(0.0, 1.0 - c * c));
-                float v = (float)(acos(c) / SG_PI);
-                for (int si = 0; si < SUB; si++) {
-                    double uu = ((double)i + (si + 0.5) / SUB) / W;
-                    double phi = 2.0 * SG_PI * (uu - 0.5);
-                    double dot = nm.x * s * cos(phi) + nm.y * c + nm.z * s * sin(phi);
-                    if (dot > 0.0) {
-                        float L[3]; /* the bilinear lookup at the subcell centre */
-                        bilerp(m, (float)uu, v, L);
-                        for (int k = 0; k < 3; k++)
-                            sum[k] += L[k] * dot * d_omega;
+                double st = sqrt(fmax(0.0, 1.0 - c * c));
+                /* bilerp's rows and weight at this subrow (clamped in v) */
+                float y = (float)(acos(c) / SG_PI) * (float)H - 0.5f, t = 0.0f;
+                int j0, j1;
+                if (!(y > 0.0f)) {
+                    j0 = j1 = 0;
+                } else if (y >= (float)(H - 1)) {
+                    j0 = j1 = H - 1;
+                } else {
+                    j0 = (int)y;
+                    j1 = j0 + 1;
+                    t = y - (float)j0;
+                }
+                for (int b = 0; b < nk; b++) {
+                    double dot = nm.x * st * cs[b][0] + nm.y * c + nm.z * st * cs[b][1];
+                    if (!(dot > 0.0))
+                        continue;
+                    const float *p00 = texel(m, col[b][0], j0), *p10 = texel(m, col[b][1], j0);
+                    const float *p01 = texel(m, col[b][0], j1), *p11 = texel(m, col[b][1], j1);
+                    float s = cw[b];
+                    for (int q = 0; q < 3; q++) {
+                        float top = p00[q] + s * (p10[q] - p00[q]), bottom = p01[q] + s * (p11[q] - p01[q]);
+                        float L = top + t * (bottom - top);
+                        sum[q] += (L > 0.0f ? L : 0.0f) * dot * d_omega;
                     }
                 }
             }

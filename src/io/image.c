@@ -52,6 +52,7 @@ sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err)
     img->width = width;
     img->height = height;
     img->data = data;
+    img->alpha = NULL; /* no coverage until a renderer gives one */
     return SG_OK;
 }
 

@@ -48,7 +48,7 @@ typedef struct sg_image {
 #define SG_IMAGE_MAX_DIM 65536
 
 /* Allocates a zero-filled width x height image into *img (whose previous
- * contents are not freed). On failure *img is untouched. */
+ * contents are not freed), alpha NULL. On failure *img is untouched. */
 sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err);
 
 /* Frees the pixels (and alpha) and zeroes the struct; NULL and zeroed
