@@ -94,8 +94,9 @@ sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const
     if (!(d->radius_scale > 0.0f) || !isfinite(d->radius_scale))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: radius scale %g must be > 0", path,
                             (double)d->radius_scale);
+    size_t turned = 0, repeated = 0;
     if (mesh->triangle_count > 0) {
-        sg_sample_desc sd = {.count = d->points, .seed = d->seed};
+        sg_sample_desc sd = {.count = d->points, .seed = d->seed, .faces_turned = &turned, .faces_repeated = &repeated};
         st = sg_points_sample_mesh(mesh, &sd, &ps, err);
     } else {
         st = sg_points_from_vertices(mesh, &ps, err);
@@ -116,7 +117,8 @@ sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const
         }
     }
     sg_model_points_report rep = {.file_vertices = mesh->vertex_count, .file_triangles = mesh->triangle_count,
-                                  .has_colors = mesh->colors != NULL};
+                                  .has_colors = mesh->colors != NULL, .faces_repeated = repeated,
+                                  .faces_turned = turned};
     if (mesh->triangle_count == 0 && mesh->radii) {
         for (size_t i = 0; i < ps.count; i++)
             ps.radius[i] *= d->radius_scale;

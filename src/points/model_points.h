@@ -30,6 +30,8 @@ typedef struct sg_model_points_report {
     size_t file_vertices;  /* vertices in the file                        */
     size_t file_triangles; /* triangles in the file (0: a point cloud)    */
     bool has_colors;       /* the file has per-vertex colours             */
+    size_t faces_repeated; /* triangles repeating an earlier one, left out */
+    size_t faces_turned;   /* triangles turned to agree with neighbours   */
     size_t capped;         /* estimated radii lowered to the cap          */
     size_t dropped;        /* points removed by drop_outliers             */
     float median_radius;   /* median estimated radius (0: file radii)     */

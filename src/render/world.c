@@ -141,6 +141,10 @@ static const char *model_label(const sg_scene_model *m)
 static void note_points(const sg_world_desc *d, size_t i, const sg_scene_model *m, const sg_model_points_report *r,
                         size_t splats)
 {
+    if (r->faces_repeated || r->faces_turned)
+        say(d, SG_WORLD_NOTE,
+            "$.models[%zu] (%s): of %zu triangles, %zu repeat an earlier one (left out) and %zu were wound against "
+            "their neighbours (turned)", i, model_label(m), r->file_triangles, r->faces_repeated, r->faces_turned);
     if (r->dropped)
         say(d, SG_WORLD_NOTE,
             "$.models[%zu] (%s): dropped %zu stray points whose radius was over %g x the median spacing",

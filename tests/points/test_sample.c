@@ -687,6 +687,40 @@ static void test_radius_cap_median_exact(void **state)
     }
 }
 
+/* Faces: a repeated triangle (same vertices, either winding) is left out,
+ * and faces wound against their neighbours are turned; a closed piece
+ * faces outward. Tetrahedron with face 2 reversed, face 0 repeated
+ * reversed: 1 repeat, 1 turned; normals point away from the centre. */
+static void test_sample_faces_oriented_and_deduplicated(void **state)
+{
+    (void)state;
+    sg_mesh m = mesh_new(4, 5);
+    set_v(&m, 0, 1, 1, 1);
+    set_v(&m, 1, 1, -1, -1);
+    set_v(&m, 2, -1, 1, -1);
+    set_v(&m, 3, -1, -1, 1);
+    set_t(&m, 0, 0, 1, 2); /* outward: (0,1,2) has normal along +(1,1,-1)... */
+    set_t(&m, 1, 0, 3, 1);
+    set_t(&m, 2, 0, 3, 2); /* wound the other way round than its neighbours */
+    set_t(&m, 3, 1, 3, 2);
+    set_t(&m, 4, 2, 1, 0); /* face 0 again, reversed */
+    size_t turned = 99, repeated = 99;
+    sg_sample_desc d = {.count = 4000, .faces_turned = &turned, .faces_repeated = &repeated};
+    sg_pointset ps;
+    sg_error err;
+    if (sg_points_sample_mesh(&m, &d, &ps, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(repeated, 1);
+    assert_true(turned == 1 || turned == 3); /* the odd one, or the other three */
+    size_t inward = 0;
+    for (size_t i = 0; i < ps.count; ++i)
+        inward += sg_v3_dot(sg_pointset_position(&ps, i), sg_pointset_normal(&ps, i)) <= 0.0f;
+    if (inward)
+        fail_msg("%zu of %zu samples have normals pointing into the tetrahedron", inward, ps.count);
+    sg_pointset_free(&ps);
+    sg_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -700,6 +734,7 @@ int main(void)
         cmocka_unit_test(test_sample_from_vertices),
         cmocka_unit_test(test_radius_grid),
         cmocka_unit_test(test_radius_duplicates),
+        cmocka_unit_test(test_sample_faces_oriented_and_deduplicated),
         cmocka_unit_test(test_radius_stray_points_capped),
         cmocka_unit_test(test_radius_cap_median_exact),
     };
