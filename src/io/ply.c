@@ -746,6 +746,17 @@ static sg_status read_vertices(ply_reader *r, const ply_header *h, const ply_pla
     return SG_OK;
 }
 
+/* Reads past one property of record index of element elem (a value or a
+ * whole list). */
+static sg_status skip_property(ply_reader *r, const ply_prop *pr, const char *elem, size_t index)
+{
+    if (pr->count_type != T_NONE)
+        return skip_list(r, pr, elem, index);
+    double v;
+    read_result rd = read_value(r, pr->type, &v);
+    return rd == RD_OK ? SG_OK : read_fail(r, rd, elem, index, pr->name, pr->type);
+}
+
 static sg_status push_triangle(ply_reader *r, tri_buf *tb, uint32_t a, uint32_t b, uint32_t c)
 {
     if (tb->count == tb->cap) {
@@ -775,14 +786,7 @@ static sg_status read_faces(ply_reader *r, const ply_header *h, const ply_plan *
             const ply_prop *pr = &props[k];
             sg_status st;
             if (k != pl->face_list) {
-                if (pr->count_type != T_NONE) {
-                    st = skip_list(r, pr, "face", i);
-                } else {
-                    double v;
-                    read_result rd = read_value(r, pr->type, &v);
-                    st = rd == RD_OK ? SG_OK : read_fail(r, rd, "face", i, pr->name, pr->type);
-                }
-                if (st != SG_OK)
+                if ((st = skip_property(r, pr, "face", i)) != SG_OK)
                     return st;
                 continue;
             }
@@ -828,14 +832,7 @@ static sg_status read_strips(ply_reader *r, const ply_header *h, const ply_plan 
             const ply_prop *pr = &props[k];
             sg_status st;
             if (k != pl->strip_list) {
-                if (pr->count_type != T_NONE) {
-                    st = skip_list(r, pr, e->name, i);
-                } else {
-                    double v;
-                    read_result rd = read_value(r, pr->type, &v);
-                    st = rd == RD_OK ? SG_OK : read_fail(r, rd, e->name, i, pr->name, pr->type);
-                }
-                if (st != SG_OK)
+                if ((st = skip_property(r, pr, e->name, i)) != SG_OK)
                     return st;
                 continue;
             }
@@ -903,15 +900,7 @@ static sg_status skip_element(ply_reader *r, const ply_header *h, const ply_elem
     }
     for (size_t i = 0; i < (size_t)e->count; i++) {
         for (size_t k = 0; k < e->prop_count; k++) {
-            const ply_prop *pr = &props[k];
-            sg_status st;
-            if (pr->count_type != T_NONE) {
-                st = skip_list(r, pr, e->name, i);
-            } else {
-                double v;
-                read_result rd = read_value(r, pr->type, &v);
-                st = rd == RD_OK ? SG_OK : read_fail(r, rd, e->name, i, pr->name, pr->type);
-            }
+            sg_status st = skip_property(r, &props[k], e->name, i);
             if (st != SG_OK)
                 return st;
         }
