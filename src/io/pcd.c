@@ -394,8 +394,12 @@ sg_status sg_pcd_read(const char *path, sg_mesh *out, sg_error *err)
                         if (f->type == 'F') {
                             float fl = (float)v;
                             memcpy(&rgb_bits, &fl, 4);
+                        } else if (v >= 0.0 && v <= 4294967295.0) { /* NaN fails too */
+                            rgb_bits = (uint32_t)v;
                         } else {
-                            rgb_bits = (uint32_t)(int64_t)v;
+                            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: point %zu: field %s: %g is not a packed "
+                                              "colour (0 to 4294967295)", path, i, f->name, v);
+                            goto fail;
                         }
                     }
                 }

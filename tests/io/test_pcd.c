@@ -156,6 +156,12 @@ static void test_pcd_errors(void **state)
     expect_fail("size3.pcd", HDR("x y z", "4 3 4", "F F F", "1", "ascii") "1 2 3\n", SG_ERR_UNSUPPORTED,
                 "SIZE of field y: '3' is not 1, 2, 4 or 8");
     expect_fail("empty.pcd", "", SG_ERR_CORRUPT, "no DATA line");
+    /* Found by fuzz_pcd: a NaN in an integer rgb field was cast to an
+     * integer (undefined behaviour). */
+    expect_fail("rgb_nan.pcd", HDR("x y z rgb", "4 4 4 4", "F F F U", "1", "ascii") "1 2 3 nan\n", SG_ERR_CORRUPT,
+                "point 0: field rgb: nan is not a packed colour (0 to 4294967295)");
+    expect_fail("rgb_neg.pcd", HDR("x y z rgba", "4 4 4 4", "F F F I", "1", "ascii") "1 2 3 -5\n", SG_ERR_CORRUPT,
+                "point 0: field rgba: -5 is not a packed colour");
 }
 
 int main(void)
