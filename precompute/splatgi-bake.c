@@ -17,19 +17,25 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "app/bake_cache.h"
+#include "app/model_scene.h"
+#include "app/preflight.h"
 #include "bake/bake.h"
 #include "bake/bake_file.h"
 #include "bake/bake_io.h"
 #include "bake/bake_job.h"
 #include "io/scene_file.h"
+#include "program.h"
 #include "render/world.h"
 
 static const char usage[] =
-    "usage: splatgi-bake SCENE.json [-o OUT.sgbake] [options]\n"
+    "usage: splatgi-bake SCENE.json|MODEL [-o OUT.sgbake] [options]\n"
     "Bakes the scene's global illumination into OUT: light per side of every splat,\n"
     "from rays at sample points (direct light, and the surfaces that send indirect\n"
     "light, solved for every bounce), and glossy bins for glossy models.\n"
-    "  -o, --out FILE    the bake (default: SCENE with .sgbake for .json)\n"
+    "  -o, --out FILE    the bake (default: SCENE with .sgbake for .json; for a\n"
+    "                    model file out/MODEL.sgbake, where splatgi-view MODEL\n"
+    "                    looks for it)\n"
     "  --direct N        envmap-sampled rays per sample site (default 32)\n"
     "  --gather-rays N   cosine-sampled rays per sample site (default 64)\n"
     "  --sample-spacing X  spacing of the sample points in median splat radii\n"
@@ -48,12 +54,14 @@ static const char usage[] =
     "  --glossy-rays M   rays per glossy sample point (default 128)\n"
     "  --threads T       OpenMP threads (default: all); results do not depend on it\n"
     "  --if-stale        do nothing when OUT already holds a bake of this scene with\n"
-    "                    these parameters and this format (checked by its header)\n"
+    "                    these parameters and this format (checked by its header),\n"
+    "                    newer than the scene's model and envmap files\n"
     "  --resume          continue from OUT.ckpt, left by an interrupted run with the\n"
     "                    same scene and options\n"
     "  --help\n"
     "Ctrl-C stops within a block of work and writes OUT.ckpt (exit status 130);\n"
-    "a second Ctrl-C quits at once without one. A finished bake removes OUT.ckpt.\n";
+    "a second Ctrl-C quits at once without one. A finished bake removes OUT.ckpt.\n"
+    "\n" SG_MODEL_SCENE_OPTIONS;
 
 /* Set by the SIGINT handler, read by the progress callback and between
  * chunks. */
@@ -71,6 +79,8 @@ typedef struct options {
     int threads;
     int resume;
     int if_stale;   /* --if-stale: keep an OUT made for this scene and these parameters */
+    sg_model_scene_desc model; /* the scene made for a model file      */
+    const char *write_scene;   /* --write-scene                        */
 } options;
 
 typedef struct progress {
@@ -169,6 +179,12 @@ static int parse_args(int argc, char **argv, options *o)
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         uint64_t n;
+        sg_error e = {0};
+        int ms = sg_model_scene_option(argc, argv, &i, &o->model, &o->write_scene, &e);
+        if (ms < 0)
+            return fail(e.message);
+        if (ms)
+            continue;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             fputs(usage, stdout);
             return 2;
@@ -245,11 +261,11 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!o->scene) {
             o->scene = a;
         } else {
-            return fail("more than one scene file given (see --help)");
+            return fail("more than one scene or model file given (see --help)");
         }
     }
     if (!o->scene)
-        return fail("no scene file given (see --help)");
+        return fail("no scene or model file given (see --help)");
     return 0;
 }
 
@@ -268,10 +284,18 @@ static void print_resume_command(int argc, char **argv)
 int main(int argc, char **argv)
 {
     options o = {0};
+    sg_prog_init("splatgi-bake");
     int pr = parse_args(argc, argv, &o);
     if (pr)
         return pr == 2 ? 0 : 1;
     char out_buf[4200], ckpt[4300];
+    if (!o.out && sg_model_scene_is_model(o.scene)) {
+        /* Where splatgi-view MODEL looks (app/bake_cache.h). */
+        sg_error e = {0};
+        if (sg_bake_cache_path(o.scene, NULL, out_buf, sizeof out_buf, &e) != SG_OK)
+            return fail(e.message);
+        o.out = out_buf;
+    }
     if (!o.out) {
         size_t n = strlen(o.scene);
         if (n > 5 && !strcmp(o.scene + n - 5, ".json"))
@@ -301,7 +325,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "splatgi-bake: %s: no checkpoint to resume (a finished bake removes it)\n", ckpt);
         goto done;
     }
-    if (sg_scene_file_load(o.scene, &sf, &err) != SG_OK) {
+    if (sg_prog_load_scene(o.scene, &o.model, o.write_scene, &sf, &err) != SG_OK) {
         fail(err.message);
         goto done;
     }
@@ -311,25 +335,38 @@ int main(int argc, char **argv)
          * bake; the parameter hash covers every value that changes it. */
         sg_bake_file *f = NULL;
         sg_error e2 = {0};
-        if (sg_bake_file_open(o.out, scene_hash, sg_bake_param_hash(&d), &f, &e2) == SG_OK &&
-            !(sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT)) {
-            sg_bake_file_close(f);
+        char why[600] = "";
+        int opened = sg_bake_file_open(o.out, scene_hash, sg_bake_param_hash(&d), &f, &e2) == SG_OK &&
+                     !(sg_bake_file_info(f)->flags & SG_BAKE_FLAG_CHECKPOINT);
+        sg_bake_file_close(f);
+        /* The header names files, not their contents: also older than an
+         * input means stale (app/bake_cache.h). */
+        if (opened && sg_bake_cache_fresh(o.out, &sf, why, sizeof why)) {
             printf("splatgi-bake: %s is up to date\n", o.out);
             rc = 0;
             goto done;
         }
-        sg_bake_file_close(f);
         if (stat(o.out, &stbuf) == 0)
-            printf("splatgi-bake: %s is stale (%s): baking again\n", o.out, e2.message);
+            printf("splatgi-bake: %s is stale (%s): baking again\n", o.out, opened ? why : e2.message);
     }
-    if (sg_world_create(&sf, &world, &err) != SG_OK) {
+    /* Where the bake goes, and the memory it needs, before the world. */
+    if (sg_prog_check_output(o.out, &err) != SG_OK ||
+        sg_prog_build_world(o.scene, &sf, sg_photon_map_bytes(2 * d.photons.count), &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
     }
     double t_world = omp_get_wtime() - t_start;
-    size_t splats = 0, models = sg_world_model_count(world);
-    for (size_t m = 0; m < models; ++m)
-        splats += sg_scene_points(sg_world_scene(world, (uint32_t)m))->count;
+    size_t splats = 0, glossy = 0, models = sg_world_model_count(world);
+    for (size_t m = 0; m < models; ++m) {
+        size_t n = sg_scene_points(sg_world_scene(world, (uint32_t)m))->count;
+        splats += n;
+        glossy += sg_world_material(world, (uint32_t)m)->type == SG_MATERIAL_GGX ? n : 0;
+    }
+    /* A full disk found before the bake, not after it. */
+    if (sg_preflight_output(o.out, sg_preflight_bake_bytes(splats, glossy), &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
 
     if (o.resume) {
         if (sg_bake_job_load(ckpt, world, &d, scene_hash, &job, &err) != SG_OK) {

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# setup.sh — installs the Debian packages splatgi needs and creates
+# setup.sh — installs the Debian packages splatgi needs (clang and
+# libclang-rt-dev for the fuzzers of scripts/fuzz.sh) and creates
 # assets/bunny.ply. Idempotent: packages already present are skipped by
 # apt-get, and an existing asset is left alone.
 set -euo pipefail
@@ -10,6 +11,7 @@ packages=(
   build-essential cmake pkg-config libcmocka-dev libpng-dev zlib1g-dev
   libopenexr-dev libomp-dev libembree-dev libcjson-dev libglfw3-dev
   libopencolorio-dev libstb-dev gnuplot-nox xvfb xauth libgl-dev blender-data
+  clang libclang-rt-dev
 )
 # node and npm only convert the bunny. A nodejs from another source (e.g.
 # NodeSource) bundles npm and conflicts with Debian's npm package, so ask for

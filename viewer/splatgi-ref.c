@@ -1,24 +1,32 @@
-/* splatgi-ref — the Monte Carlo reference renderer: reads a scene file,
- * path traces one camera's view and writes the mean image (EXR), its
- * per-pixel standard error (EXR) and a JSON summary. Options, library calls
- * and a report; the estimator lives in src/ref/pathtrace.c.
+/* splatgi-ref — the Monte Carlo reference renderer: reads a scene file (or
+ * makes the scene for a model file), path traces one camera's view and
+ * writes the mean image (EXR, coverage as alpha), its per-pixel standard
+ * error (EXR) and a JSON summary. Options, library calls and a report; the
+ * estimator lives in src/ref/pathtrace.c.
  */
 #include <errno.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <cjson/cJSON.h>
 
+#include "app/model_scene.h"
+#include "app/preflight.h"
+#include "core/alloc.h"
 #include "core/cli.h"
+#include "core/file_mode.h"
 #include "io/image.h"
 #include "io/scene_file.h"
+#include "program.h"
 #include "ref/pathtrace.h"
+#include "render/coverage.h"
 #include "render/world.h"
 
 static const char usage[] =
-    "usage: splatgi-ref SCENE.json [options]\n"
+    "usage: splatgi-ref SCENE.json|MODEL [options]\n"
     "Unbiased path tracing of a scene file (the reference the bake is judged by).\n"
     "  --camera NAME     camera of the scene file (default: its first; none:\n"
     "                    the models framed from the front, above)\n"
@@ -28,9 +36,14 @@ static const char usage[] =
     "  --seed S --threads N\n"
     "  --progressive     render in passes of doubling size (1, 1, 2, 4, ... paths)\n"
     "                    and rewrite the outputs after each pass\n"
+    "  --pixel-centres   every path through its pixel's centre (the rays of the\n"
+    "                    lookup frame, for exact comparisons), not jittered\n"
     "  --out FILE.exr    mean radiance (default out/ref.exr); beside it\n"
-    "                    FILE.stderr.exr (standard error) and FILE.json (summary)\n"
-    "  --help\n";
+    "                    FILE.stderr.exr (standard error) and FILE.json (summary);\n"
+    "                    alpha: coverage, the share of a pixel showing a model\n"
+    "                    (4 x 4 rays a pixel; 1 with --pixel-centres)\n"
+    "  --help\n"
+    "\n" SG_MODEL_SCENE_OPTIONS;
 
 static int fail(const char *msg)
 {
@@ -70,6 +83,7 @@ static int write_summary(const char *path, const char *scene, const sg_ref_desc 
     cJSON_AddNumberToObject(o, "spp", d->spp);
     cJSON_AddNumberToObject(o, "max_depth", d->max_depth);
     cJSON_AddNumberToObject(o, "seed", (double)d->seed);
+    cJSON_AddBoolToObject(o, "pixel_centres", d->pixel_centres);
     double mean[3] = {r->mean_radiance[0], r->mean_radiance[1], r->mean_radiance[2]};
     cJSON_AddItemToObject(o, "mean_radiance", cJSON_CreateDoubleArray(mean, 3));
     cJSON_AddNumberToObject(o, "seconds", r->seconds);
@@ -89,7 +103,7 @@ static int write_summary(const char *path, const char *scene, const sg_ref_desc 
     if (f && fclose(f) != 0)
         ok = 0;
     cJSON_free(text);
-    if (!ok || rename(tmp, path) != 0) {
+    if (!ok || chmod(tmp, sg_output_file_mode(path)) != 0 || rename(tmp, path) != 0) {
         remove(tmp);
         return 0;
     }
@@ -98,16 +112,26 @@ static int write_summary(const char *path, const char *scene, const sg_ref_desc 
 
 int main(int argc, char **argv)
 {
-    const char *scene_path = NULL, *camera = NULL, *out = "out/ref.exr";
+    const char *scene_path = NULL, *camera = NULL, *out = "out/ref.exr", *write_scene = NULL;
     long spp = 0, depth = -1, width = 0, height = 0, threads = 0, seed = -1;
-    int progressive = 0;
+    int progressive = 0, centres = 0;
+    sg_model_scene_desc md = {0};
+    sg_prog_init("splatgi-ref");
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        sg_error oe = {0};
+        int ms = sg_model_scene_option(argc, argv, &i, &md, &write_scene, &oe);
+        if (ms < 0)
+            return fail(oe.message);
+        if (ms)
+            continue;
         if (!strcmp(a, "--help")) {
             fputs(usage, stdout);
             return 0;
         } else if (!strcmp(a, "--progressive")) {
             progressive = 1;
+        } else if (!strcmp(a, "--pixel-centres") || !strcmp(a, "--pixel-centers")) {
+            centres = 1;
         } else if (!strcmp(a, "--camera") && v) {
             camera = v;
             ++i;
@@ -142,16 +166,25 @@ int main(int argc, char **argv)
         }
     }
     if (!scene_path)
-        return fail("no scene file given (see --help)");
+        return fail("no scene or model file given (see --help)");
 
     sg_error err = {0};
-    sg_scene_file sf;
-    if (sg_scene_file_load(scene_path, &sf, &err) != SG_OK)
-        return fail(err.message);
+    sg_scene_file sf = {0};
     sg_world *world = NULL;
     int rc = 1;
     sg_ref_result r = {0};
-    if (sg_world_create(&sf, &world, &err) != SG_OK) {
+    float *coverage = NULL; /* alpha of both images (render/coverage.h) */
+    const sg_scene_camera *cam0 = NULL;
+    if (sg_prog_load_scene(scene_path, &md, write_scene, &sf, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
+    if (camera && !(cam0 = sg_scene_file_find_camera(&sf, camera))) {
+        fprintf(stderr, "splatgi-ref: %s: no camera named '%s'\n", scene_path, camera);
+        goto done;
+    }
+    /* Where the outputs go, before the world is built. */
+    if (sg_prog_check_output(out, &err) != SG_OK || sg_prog_build_world(scene_path, &sf, 0, &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
     }
@@ -162,14 +195,10 @@ int main(int argc, char **argv)
         .max_depth = depth >= 0 ? (int)depth : sf.render.max_depth,
         .seed = seed >= 0 ? (uint64_t)seed : sf.render.seed,
         .threads = threads ? (int)threads : sf.render.threads,
+        .pixel_centres = centres,
     };
     float aspect = (float)d.width / (float)d.height;
-    const sg_scene_camera *cam = camera ? sg_scene_file_find_camera(&sf, camera)
-                                        : (sf.camera_count ? &sf.cameras[0] : NULL);
-    if (camera && !cam) {
-        fprintf(stderr, "splatgi-ref: %s: no camera named '%s'\n", scene_path, camera);
-        goto done;
-    }
+    const sg_scene_camera *cam = camera ? cam0 : (sf.camera_count ? &sf.cameras[0] : NULL);
     sg_status st = cam ? sg_camera_look_at(cam->eye, cam->look, cam->up, cam->fov_deg, aspect, &d.camera, &err)
                        : sg_camera_frame(sg_world_bounds(world), sg_v3(0.0f, -0.35f, -1.0f), sg_v3(0, 1, 0), 40.0f,
                                          aspect, 0.0f, &d.camera, &err);
@@ -180,6 +209,15 @@ int main(int argc, char **argv)
     char se_path[4200], json_path[4200];
     sibling(out, ".stderr.exr", se_path, sizeof se_path);
     sibling(out, ".json", json_path, sizeof json_path);
+    /* Coverage, the alpha of both images: the area of each pixel where the
+     * camera sees a model (4 x 4 rays; the centre ray alone when every path
+     * goes through it). */
+    sg_coverage_desc cd = {.camera = d.camera, .width = d.width, .height = d.height, .per_side = centres ? 1 : 4,
+                           .threads = d.threads};
+    if (sg_coverage_render(world, &cd, &coverage, &err) != SG_OK) {
+        fail(err.message);
+        goto done;
+    }
     int total = d.spp, done_spp = 0;
     while (done_spp < total) {
         /* One pass, or doubling passes: the image after each has as many
@@ -207,8 +245,12 @@ int main(int argc, char **argv)
         }
         done_spp += n;
         d.spp = done_spp;
-        if (sg_image_write(&r.mean, out, 1.0f, &err) != SG_OK ||
-            sg_image_write(&r.std_error, se_path, 1.0f, &err) != SG_OK) {
+        r.mean.alpha = r.std_error.alpha = coverage; /* shared for the writes only */
+        st = sg_image_write(&r.mean, out, 1.0f, &err);
+        if (st == SG_OK)
+            st = sg_image_write(&r.std_error, se_path, 1.0f, &err);
+        r.mean.alpha = r.std_error.alpha = NULL;
+        if (st != SG_OK) {
             fail(err.message);
             goto done;
         }
@@ -216,14 +258,17 @@ int main(int argc, char **argv)
             fprintf(stderr, "splatgi-ref: %s: cannot write the summary\n", json_path);
             goto done;
         }
-        if (progressive)
+        if (progressive) {
             printf("splatgi-ref: %d of %d spp, %.2f s\n", done_spp, total, r.seconds);
+            fflush(stdout); /* a pipe buffers: the progress would come at the end */
+        }
     }
     printf("splatgi-ref: %dx%d, %d spp, %.2f s, %.2f Mrays/s, mean radiance (%.5g, %.5g, %.5g) -> %s\n", d.width,
            d.height, d.spp, r.seconds, r.seconds > 0 ? (double)r.rays.rays / r.seconds / 1e6 : 0.0,
            r.mean_radiance[0], r.mean_radiance[1], r.mean_radiance[2], out);
     rc = 0;
 done:
+    sg_free(coverage);
     sg_ref_result_free(&r);
     sg_world_destroy(world);
     sg_scene_file_free(&sf);

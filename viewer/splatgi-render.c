@@ -1,8 +1,11 @@
-/* splatgi-render — headless frame renderer: loads a model (or the default
- * scene), builds the ray-tracing scene, renders one primary ray per pixel
- * and writes an EXR or PNG; or, with --scene and --bake, renders a scene
- * file's world lit by a bake (sg_bake_render). Options, library calls and
- * a report; no algorithm lives here. Run with --help for the options.
+/* splatgi-render — headless frame renderer. Given a scene file or a model
+ * file (splatgi-render scan.ply), renders the scene's world lit by its
+ * bake (sg_bake_render), the bake kept beside the output and made first
+ * when missing or out of date; with --model (or --default) renders a model
+ * (or the built-in bunny scene) directly, one primary ray per pixel, Phong
+ * or simple shading. Writes an EXR (with coverage as alpha) or a PNG.
+ * Options, library calls and a report; no algorithm lives here. Run with
+ * --help for the options.
  */
 #include <errno.h>
 #include <float.h>
@@ -15,12 +18,16 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "app/model_scene.h"
+#include "app/preflight.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
 #include "core/cli.h"
 #include "io/image.h"
 #include "io/scene_file.h"
+#include "program.h"
 #include "render/camera.h"
+#include "render/coverage.h"
 #include "render/default_scene.h"
 #include "render/render.h"
 #include "render/world.h"
@@ -29,15 +36,22 @@
 #define DEFAULT_OUT "out/render.png"
 
 static const char usage[] =
-    "usage: splatgi-render [options]\n"
-    "Renders a point model (or the built-in bunny scene) with one ray per pixel.\n"
+    "usage: splatgi-render SCENE.json|MODEL [--bake FILE] [options]   (lit by the bake)\n"
+    "       splatgi-render [--model MODEL | --default] [options]      (direct shading)\n"
+    "The first form renders the scene (or the scene made for a model file, see\n"
+    "below) lit by its bake: --bake FILE, else OUT's folder/<name>.sgbake, made\n"
+    "there first when missing or out of date. The second renders a model (or the\n"
+    "built-in bunny scene) with one ray per pixel and a simple light.\n"
     "\n"
-    "Model\n"
-    "  --model PATH        .ply or .obj; a mesh is sampled to --points splats,\n"
-    "                      a point cloud uses its vertices\n"
+    "Model (direct shading)\n"
+    "  --model PATH        .ply .obj .xyz .txt .pcd; a mesh is sampled to --points\n"
+    "                      splats, a point cloud uses its vertices; a model\n"
+    "                      without colours is shown light grey (0.8)\n"
     "  --default           the built-in scene: bunny on a ground plane (also when\n"
-    "                      no --model is given)\n"
+    "                      neither a scene nor --model is given)\n"
     "  --points N          samples on a mesh (default 250000)\n"
+    "  --up AXIS           the model's up axis (x, y, z, -x, -y, -z); --up x,y,z\n"
+    "                      sets the camera's up vector instead\n"
     "  --radius-k K        splat radius from the K-th nearest neighbour (default 8)\n"
     "  --radius-scale S    radius multiplier (default 1)\n"
     "Surface\n"
@@ -47,8 +61,9 @@ static const char usage[] =
     "  --no-shrink --no-encourage --no-collapse   turn off a kd-tree refinement\n"
     "  --no-refine         turn off all three\n"
     "Baked light (instead of Model and Surface)\n"
-    "  --scene FILE.json   the world of a scene file (models, materials, envmap)\n"
-    "  --bake FILE.sgbake  its bake (splatgi-bake); checked against the scene\n"
+    "  --scene FILE.json   the same as giving the scene file first\n"
+    "  --bake FILE.sgbake  its bake (splatgi-bake), which must be up to date;\n"
+    "                      default: the cache beside --out\n"
     "  --camera NAME       a camera of the scene file (default: --eye if given,\n"
     "                      else the file's first camera, else a framed view);\n"
     "                      size defaults to the file's render width x height\n"
@@ -62,7 +77,8 @@ static const char usage[] =
     "  --repeat N          render N times, report best and mean (default 1)\n"
     "  --out FILE          .exr (scene-linear) or .png (sRGB); default " DEFAULT_OUT "\n"
     "  --stats             print per-ray traversal statistics and scene facts\n"
-    "  --help              this text\n";
+    "  --help              this text\n"
+    "\n" SG_MODEL_SCENE_OPTIONS;
 
 typedef struct options {
     const char *model;          /* NULL: default scene                  */
@@ -81,6 +97,8 @@ typedef struct options {
     const char *bake;           /* --bake                               */
     const char *camera;         /* --camera                             */
     int have_width, have_height, have_model;
+    sg_model_scene_desc model_scene; /* --envmap, --up AXIS, ...         */
+    const char *write_scene;    /* --write-scene                        */
 } options;
 
 static int fail(const char *fmt, ...)
@@ -133,8 +151,20 @@ static int parse_args(int argc, char **argv, options *o)
         if (!strcmp(a, "--no-encourage")) { o->scene.kd_disable |= SG_KD_NO_ENCOURAGE; continue; }
         if (!strcmp(a, "--no-collapse")) { o->scene.kd_disable |= SG_KD_NO_COLLAPSE; continue; }
         if (!strcmp(a, "--no-refine")) { o->scene.kd_disable |= SG_KD_NO_REFINEMENTS; continue; }
+        sg_error e = {0};
+        int ms = sg_model_scene_option(argc, argv, &i, &o->model_scene, &o->write_scene, &e);
+        if (ms < 0)
+            return fail("%s", e.message);
+        if (ms)
+            continue;
+        if (strncmp(a, "--", 2) && a[0] != '-') { /* the scene or model file */
+            if (o->scene_file)
+                return fail("unexpected argument '%s' (one scene or model file; see --help)", a);
+            o->scene_file = a;
+            continue;
+        }
         static const char *const with_value[] = {
-            "--model", "--points", "--radius-k", "--radius-scale", "--surface", "--kernel",
+            "--model", "--radius-k", "--radius-scale", "--surface", "--kernel",
             "--samples", "--shade", "--width", "--height", "--eye", "--look", "--up", "--light",
             "--fov", "--threads", "--repeat", "--out", "--scene", "--bake", "--camera"};
         int known = 0;
@@ -156,9 +186,6 @@ static int parse_args(int argc, char **argv, options *o)
             o->bake = v;
         } else if (!strcmp(a, "--camera")) {
             o->camera = v;
-        } else if (!strcmp(a, "--points")) {
-            if (!parse_long(a, v, 1, 1L << 31, &n)) return 1;
-            o->points.points = (size_t)n;
         } else if (!strcmp(a, "--radius-k")) {
             if (!parse_long(a, v, 1, 256, &n)) return 1;
             o->points.radius_k = (unsigned)n;
@@ -213,41 +240,57 @@ static int parse_args(int argc, char **argv, options *o)
             o->out = v;
         }
     }
-    if (!o->scene_file != !o->bake)
-        return fail("--scene and --bake go together (see --help)");
+    if (o->bake && !o->scene_file)
+        return fail("--bake lights a scene: give the scene or model file first (see --help)");
     if (o->scene_file && o->have_model)
-        return fail("--scene renders a scene file's models; drop --model/--default");
+        return fail("a scene or model file to render from its bake, or --model/--default to shade directly: not "
+                    "both (see --help)");
     if (o->camera && !o->scene_file)
-        return fail("--camera names a camera of a --scene file");
+        return fail("--camera names a camera of a scene file");
+    /* The direct renderer reads the model options itself. */
+    o->points.points = o->model_scene.points;
+    o->points.radius_cap = o->model_scene.radius_cap;
+    o->points.drop_outliers = o->model_scene.drop_outliers;
+    if (!o->scene_file && (o->model_scene.envmap || o->write_scene))
+        return fail("--envmap and --write-scene make a scene for a model file given first (see --help)");
     return 0;
 }
 
-/* --scene/--bake: the scene file's world, lit by the bake. */
-static int render_from_bake(const options *o)
+/* A scene or model file's world, lit by its bake. */
+static int render_from_bake(const options *o0)
 {
+    options ov = *o0;
+    const options *o = &ov;
     int code = 1;
     sg_error err = {0};
     sg_scene_file sf = {0};
     sg_world *world = NULL;
     sg_bake *bake = NULL;
     sg_image img = {0};
+    sg_prog_bake plan;
+    const sg_scene_camera *cam = NULL;
+    if (sg_prog_load_scene(o->scene_file, &ov.model_scene, o->write_scene, &sf, &err) != SG_OK)
+        goto done;
+    if (o->camera && !(cam = sg_scene_file_find_camera(&sf, o->camera))) {
+        sg_error_set(&err, SG_ERR_INVALID_ARG, "%s: no camera named '%s'", o->scene_file, o->camera);
+        goto done;
+    }
+    /* The output and the bake's header before the world is built. */
+    if (sg_prog_check_output(o->out, &err) != SG_OK ||
+        sg_prog_bake_plan(o->scene_file, o->out, o->bake, &sf, &plan, &err) != SG_OK)
+        goto done;
     double t0 = omp_get_wtime();
-    if (sg_scene_file_load(o->scene_file, &sf, &err) != SG_OK || sg_world_create(&sf, &world, &err) != SG_OK)
+    if (sg_prog_build_world(o->scene_file, &sf, 0, &world, &err) != SG_OK)
         goto done;
     double t_world = omp_get_wtime() - t0;
     t0 = omp_get_wtime();
-    if (sg_bake_load(o->bake, world, sg_scene_file_hash(&sf, SG_SCENE_HASH_BAKE), &bake, &err) != SG_OK)
+    if (sg_prog_bake_obtain(&plan, &sf, world, &bake, &err) != SG_OK)
         goto done;
     double t_load = omp_get_wtime() - t0;
     sg_bake_frame_desc fd = {.width = o->have_width ? o->width : sf.render.width,
                              .height = o->have_height ? o->height : sf.render.height,
                              .threads = o->threads};
     float aspect = (float)fd.width / (float)fd.height;
-    const sg_scene_camera *cam = NULL;
-    if (o->camera && !(cam = sg_scene_file_find_camera(&sf, o->camera))) {
-        sg_error_set(&err, SG_ERR_INVALID_ARG, "%s: no camera named '%s'", o->scene_file, o->camera);
-        goto done;
-    }
     if (!cam && !o->have_eye && sf.camera_count)
         cam = &sf.cameras[0];
     sg_aabb bounds = sg_world_bounds(world);
@@ -271,13 +314,17 @@ static int render_from_bake(const options *o)
         best = sec < best ? sec : best;
         total += sec;
     }
+    /* Coverage, the alpha of an EXR: which of the frame's rays hit. */
+    sg_coverage_desc cd = {.camera = fd.camera, .width = img.width, .height = img.height, .threads = o->threads};
+    if (sg_coverage_render(world, &cd, &img.alpha, &err) != SG_OK)
+        goto done;
     if (sg_image_write(&img, o->out, 1.0f, &err) != SG_OK)
         goto done;
     sg_bake_stats bs;
     sg_bake_get_stats(bake, &bs);
-    printf("splatgi-render: %dx%d from %s (%zu splats, %zu photons), world %.2f s, bake load %.3f s, "
+    printf("splatgi-render: %dx%d from %s (%zu splats, %zu photons), world %.2f s, bake %.3f s, "
            "frame %.1f ms best / %.1f ms mean (%d run%s) -> %s\n",
-           img.width, img.height, o->bake, bs.splats, bs.photons_shot, t_world, t_load, best * 1e3,
+           img.width, img.height, plan.path, bs.splats, bs.photons_shot, t_world, t_load, best * 1e3,
            total / o->repeat * 1e3, o->repeat, o->repeat == 1 ? "" : "s", o->out);
     code = 0;
 done:
@@ -330,11 +377,10 @@ static void print_stats(const options *o, const sg_scene_info *info, const sg_re
 int main(int argc, char **argv)
 {
     options o = {.width = 512, .height = 512, .fov = 40.0f, .repeat = 1, .out = DEFAULT_OUT};
+    sg_prog_init("splatgi-render");
     int pr = parse_args(argc, argv, &o);
     if (pr)
         return pr == 2 ? 0 : 1;
-    if (!strcmp(o.out, DEFAULT_OUT))
-        mkdir("out", 0777); /* the default folder; an error shows at write time */
     if (o.scene_file)
         return render_from_bake(&o);
 
@@ -350,9 +396,27 @@ int main(int argc, char **argv)
     sg_render_desc rd = {.width = o.width, .height = o.height, .shade = o.shade, .threads = o.threads};
     float aspect = (float)o.width / (float)o.height;
 
+    if (sg_prog_check_output(o.out, &err) != SG_OK)
+        goto done;
     if (o.model) {
+        sg_model_points_report rep;
+        o.points.report = &rep;
         if (sg_model_points_load(o.model, &o.points, &model, &err) != SG_OK)
             goto done;
+        if (!rep.has_colors) /* white points under this light: show them in a light grey */
+            for (size_t i = 0; i < model.count; i++)
+                model.ar[i] = model.ag[i] = model.ab[i] = 0.8f;
+        if (rep.capped || rep.dropped)
+            fprintf(stderr, "splatgi-render: note: %s: %zu splat radii capped at %.4g (%g x the median), %zu stray "
+                            "points dropped\n", o.model, rep.capped, (double)rep.cap_radius,
+                    (double)(o.points.radius_cap > 0.0f ? o.points.radius_cap : SG_RADIUS_CAP_DEFAULT), rep.dropped);
+        if (o.model_scene.up != SG_SCENE_UP_POS_Y) /* --up z: a Z-up scan stood upright */
+            for (size_t i = 0; i < model.count; i++) {
+                sg_vec3 p = sg_scene_up_apply(o.model_scene.up, sg_pointset_position(&model, i));
+                sg_vec3 n = sg_scene_up_apply(o.model_scene.up, sg_pointset_normal(&model, i));
+                model.px[i] = p.x, model.py[i] = p.y, model.pz[i] = p.z;
+                model.nx[i] = n.x, model.ny[i] = n.y, model.nz[i] = n.z;
+            }
         points = &model;
         bounds = sg_pointset_bounds(&model);
     } else {

@@ -22,6 +22,7 @@
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
 
+#include "app/model_scene.h"
 #include "core/cli.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
@@ -33,13 +34,22 @@
 #include "view/campath.h"
 #include "view/frame.h"
 #include "view/navigator.h"
+#include "program.h"
 
 #define OUT_DIR "out"
 
+#define KEYS_HELP                                                                                 \
+    "Keys: W/A/S/D or arrows move, Q/E down/up, Shift faster, left-drag looks,\n"                 \
+    "O toggles orbit, R resets, +/- exposure, P screenshot (out/shot_NNNN.exr + .png),\n"          \
+    "C starts/stops recording the camera path (out/path.txt), Esc quits.\n"
+
 static const char usage[] =
-    "usage: splatgi-view SCENE.json --bake SCENE.sgbake [options]\n"
-    "Walks through a scene lit by its bake (make one with: splatgi-bake SCENE.json -o SCENE.sgbake).\n"
+    "usage: splatgi-view SCENE.json|MODEL [--bake FILE.sgbake] [options]\n"
+    "Walks through a scene lit by its bake. Without --bake the bake is kept in\n"
+    "out/<name>.sgbake and made there first when missing or out of date (default\n"
+    "parameters; splatgi-bake -o out/<name>.sgbake makes one with others).\n"
     "\n"
+    "  --bake FILE         the bake to show (must be up to date for the scene)\n"
     "  --camera NAME       first view: this camera of the scene file (default: the\n"
     "                      file's first camera, else a view framing the scene)\n"
     "  --width W --height H   window / frame size (default: the file's render size)\n"
@@ -55,10 +65,7 @@ static const char usage[] =
     "  --frames N          quit after N window frames\n"
     "  --screenshot-on-exit FILE.png   read the window back into a PNG on exit\n"
     "  --help              this text\n"
-    "\n"
-    "Keys: W/A/S/D or arrows move, Q/E down/up, Shift faster, left-drag looks,\n"
-    "O toggles orbit, R resets, +/- exposure, P screenshot (out/shot_NNNN.exr + .png),\n"
-    "C starts/stops recording the camera path (out/path.txt), Esc quits.\n";
+    "\n" SG_MODEL_SCENE_OPTIONS "\n" KEYS_HELP;
 
 typedef struct options {
     const char *scene;      /* positional                              */
@@ -74,6 +81,8 @@ typedef struct options {
     const char *out;        /* --out                                   */
     long frames;            /* 0: until closed                         */
     const char *screenshot; /* --screenshot-on-exit                    */
+    sg_model_scene_desc model; /* the scene made for a model file     */
+    const char *write_scene;   /* --write-scene                       */
 } options;
 
 static int fail(const char *fmt, ...)
@@ -109,9 +118,15 @@ static int parse_args(int argc, char **argv, options *o)
         }
         if (!strcmp(a, "--headless")) { o->headless = 1; continue; }
         if (!strcmp(a, "--exr")) { o->exr = 1; continue; }
+        sg_error e = {0};
+        int m = sg_model_scene_option(argc, argv, &i, &o->model, &o->write_scene, &e);
+        if (m < 0)
+            return fail("%s", e.message);
+        if (m)
+            continue;
         if (strncmp(a, "--", 2)) {
             if (o->scene)
-                return fail("unexpected argument '%s' (one scene file; see --help)", a);
+                return fail("unexpected argument '%s' (one scene or model file; see --help)", a);
             o->scene = a;
             continue;
         }
@@ -161,9 +176,7 @@ static int parse_args(int argc, char **argv, options *o)
         }
     }
     if (!o->scene)
-        return fail("no scene file (usage: splatgi-view SCENE.json --bake SCENE.sgbake; see --help)");
-    if (!o->bake)
-        return fail("--bake is required; make one with: splatgi-bake %s -o scene.sgbake", o->scene);
+        return fail("no scene or model file (usage: splatgi-view SCENE.json|MODEL [--bake FILE]; see --help)");
     if (o->headless && (!o->path || !o->out))
         return fail("--headless needs --path FILE and --out DIR");
     if (!o->headless && (o->out || o->exr))
@@ -191,24 +204,33 @@ static void viewer_free(viewer *v)
     sg_scene_file_free(&v->sf);
 }
 
+/* Scene, bake plan (its header checked before the world), world, bake,
+ * display, first view. */
 static int viewer_load(viewer *v, sg_error *err)
 {
-    const options *o = &v->opt;
-    double t0 = omp_get_wtime();
-    if (sg_scene_file_load(o->scene, &v->sf, err) != SG_OK || sg_world_create(&v->sf, &v->world, err) != SG_OK)
+    options *o = &v->opt;
+    if (sg_prog_load_scene(o->scene, &o->model, o->write_scene, &v->sf, err) != SG_OK)
         return 0;
-    double t1 = omp_get_wtime();
-    if (sg_bake_load(o->bake, v->world, sg_scene_file_hash(&v->sf, SG_SCENE_HASH_BAKE), &v->bake, err) != SG_OK)
-        return 0;
-    double t2 = omp_get_wtime();
-    sg_display_desc dd = {.display = o->display, .view = o->view, .exposure_stops = o->exposure};
-    if (sg_display_create(&dd, &v->display, err) != SG_OK)
+    if (o->path && sg_campath_read(o->path, &v->path, err) != SG_OK)
         return 0;
     const sg_scene_camera *cam = NULL;
     if (o->camera && !(cam = sg_scene_file_find_camera(&v->sf, o->camera))) {
         sg_error_set(err, SG_ERR_INVALID_ARG, "%s: no camera named '%s'", o->scene, o->camera);
         return 0;
     }
+    sg_prog_bake plan;
+    if (sg_prog_bake_plan(o->scene, NULL, o->bake, &v->sf, &plan, err) != SG_OK)
+        return 0;
+    double t0 = omp_get_wtime();
+    if (sg_prog_build_world(o->scene, &v->sf, 0, &v->world, err) != SG_OK)
+        return 0;
+    double t1 = omp_get_wtime();
+    if (sg_prog_bake_obtain(&plan, &v->sf, v->world, &v->bake, err) != SG_OK)
+        return 0;
+    double t2 = omp_get_wtime();
+    sg_display_desc dd = {.display = o->display, .view = o->view, .exposure_stops = o->exposure};
+    if (sg_display_create(&dd, &v->display, err) != SG_OK)
+        return 0;
     if (!cam && v->sf.camera_count)
         cam = &v->sf.cameras[0];
     if (cam) {
@@ -216,14 +238,13 @@ static int viewer_load(viewer *v, sg_error *err)
     } else if (sg_nav_frame_view(sg_world_bounds(v->world), &v->home, err) != SG_OK) {
         return 0;
     }
-    if (o->path && sg_campath_read(o->path, &v->path, err) != SG_OK)
-        return 0;
     sg_bake_stats bs;
     sg_bake_get_stats(v->bake, &bs);
     sg_display_info di;
     sg_display_get_info(v->display, &di);
-    printf("splatgi-view: %s: %zu models, %zu splats; world %.2f s, bake %.3f s; display %s / %s\n", o->scene,
-           bs.models, bs.splats, t1 - t0, t2 - t1, di.display, di.view);
+    printf("splatgi-view: %s: %zu models, %zu splats; world %.2f s, bake %.3f s (%s); display %s / %s\n", o->scene,
+           bs.models, bs.splats, t1 - t0, t2 - t1, plan.path, di.display, di.view);
+    fflush(stdout);
     return 1;
 }
 
@@ -485,21 +506,11 @@ static void read_input(app *a, sg_nav_input *in)
     a->last_y = y;
 }
 
+/* The window; GLFW is initialised (main checks the display before the
+ * world is built). */
 static int run_window(viewer *v)
 {
     const options *o = &v->opt;
-    if (!getenv("DISPLAY") && !getenv("WAYLAND_DISPLAY")) {
-        fprintf(stderr, "splatgi-view: no display available (DISPLAY is not set); "
-                        "use --headless --path walk.txt --out DIR\n");
-        return 1;
-    }
-    if (!glfwInit()) {
-        const char *why = NULL;
-        glfwGetError(&why);
-        fprintf(stderr, "splatgi-view: no display available (glfwInit failed: %s); "
-                        "use --headless --path walk.txt --out DIR\n", why ? why : "unknown reason");
-        return 1;
-    }
     int w, h, rc = 1;
     long frames = 0; /* drawn */
     frame_size(v, &w, &h);
@@ -512,9 +523,10 @@ static int run_window(viewer *v)
         const char *why = NULL;
         glfwGetError(&why);
         fprintf(stderr, "splatgi-view: cannot open a window: %s\n", why ? why : "unknown reason");
-        glfwTerminate();
         return 1;
     }
+    fputs(KEYS_HELP, stdout); /* the window is open: how to move in it */
+    fflush(stdout);
     glfwMakeContextCurrent(a.win);
     glfwSwapInterval(0);
     glfwSetWindowUserPointer(a.win, &a);
@@ -655,7 +667,6 @@ done:
     sg_view_frame_free(&a.frame);
     glDeleteTextures(1, &a.tex);
     glfwDestroyWindow(a.win);
-    glfwTerminate();
     printf("splatgi-view: %ld frames\n", frames);
     return rc;
 }
@@ -664,18 +675,30 @@ int main(int argc, char **argv)
 {
     viewer v = {0};
     v.opt.move_scale = 0; /* auto */
+    sg_prog_init("splatgi-view");
     int r = parse_args(argc, argv, &v.opt);
     if (r)
         return r == 2 ? 0 : 1;
-    if (!v.opt.headless && !getenv("DISPLAY") && !getenv("WAYLAND_DISPLAY"))
-        return fail("no display available (DISPLAY is not set); use --headless --path walk.txt --out DIR");
-    sg_error err = {0};
-    if (!viewer_load(&v, &err)) {
-        fprintf(stderr, "splatgi-view: %s\n", err.message);
-        viewer_free(&v);
-        return 1;
+    /* The display first: finding it missing after building the world
+     * wastes the build. */
+    if (!v.opt.headless) {
+        if (!getenv("DISPLAY") && !getenv("WAYLAND_DISPLAY"))
+            return fail("no display available (DISPLAY is not set); use --headless --path walk.txt --out DIR");
+        if (!glfwInit()) {
+            const char *why = NULL;
+            glfwGetError(&why);
+            return fail("no display available (glfwInit failed: %s); use --headless --path walk.txt --out DIR",
+                        why ? why : "unknown reason");
+        }
     }
-    int rc = v.opt.headless ? run_headless(&v) : run_window(&v);
+    sg_error err = {0};
+    int rc = 1;
+    if (!viewer_load(&v, &err))
+        fprintf(stderr, "splatgi-view: %s\n", err.message);
+    else
+        rc = v.opt.headless ? run_headless(&v) : run_window(&v);
     viewer_free(&v);
+    if (!v.opt.headless)
+        glfwTerminate();
     return rc;
 }

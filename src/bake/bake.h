@@ -157,8 +157,10 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * visibility ratio times the tabulated unshadowed irradiance; 3: bright
  * texels of the table must also stand out from the mean; 4: light per
  * side, sample sites with stratified rays, indirect light by the transport
- * solve. */
-#define SG_BAKE_ALGORITHM 4u
+ * solve; 5: the bilinear envmap lookup and its sampling (envmap.h), white
+ * points for files without colours, mesh samples on the Phong-tessellated
+ * surface. */
+#define SG_BAKE_ALGORITHM 5u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

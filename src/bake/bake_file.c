@@ -51,6 +51,7 @@
 #include <zlib.h>
 
 #include "core/alloc.h"
+#include "core/file_mode.h"
 
 /* Payloads are the host's bytes and the format is little-endian. */
 #if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && \
@@ -517,11 +518,9 @@ sg_status sg_bake_writer_commit(sg_bake_writer *w, sg_error *err)
     free(buf);
     if (!ok)
         return fail_io(w, err, "cannot write the header");
-    /* A replaced file keeps its mode; a new one gets 0644 (mkstemp made it
-     * 0600). */
-    struct stat old;
-    mode_t mode = stat(w->path, &old) == 0 && S_ISREG(old.st_mode) ? (old.st_mode & 07777) : 0644;
-    if (fchmod(w->fd, mode) != 0)
+    /* A replaced file keeps its mode; a new one gets 0666 & ~umask like
+     * every output (core/file_mode.h; mkstemp made it 0600). */
+    if (fchmod(w->fd, sg_output_file_mode(w->path)) != 0)
         return fail_io(w, err, "cannot set the file mode");
     if (fsync(w->fd) != 0)
         return fail_io(w, err, "fsync failed");

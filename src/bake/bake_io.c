@@ -157,6 +157,12 @@ sg_status sg_bake_io__read_meta(const sg_bake_file *f, const char *path, uint64_
     return SG_OK;
 }
 
+sg_status sg_bake_file_desc(const sg_bake_file *f, const char *path, sg_bake_desc *out, sg_error *err)
+{
+    uint64_t meta[SG_BAKE_META_COUNT];
+    return sg_bake_io__read_meta(f, path, meta, out, err);
+}
+
 /* What is wrong with an irradiance or flux value, or NULL. */
 const char *sg_bake_io__bad_value(float v)
 {

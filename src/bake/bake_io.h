@@ -114,6 +114,7 @@
 #include <stdint.h>
 
 #include "bake/bake.h"
+#include "bake/bake_file.h"
 #include "bake/bake_job.h"
 #include "bake/photons.h"
 #include "core/error.h"
@@ -129,6 +130,13 @@ sg_status sg_bake_save(const sg_bake *b, const char *path, uint64_t scene_hash, 
  * finished bake, that its model and splat counts are w's, and every value.
  * *out: release with sg_bake_destroy. */
 sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash, sg_bake **out, sg_error *err);
+
+/* The parameters the bake or checkpoint f (opened from path) was made with:
+ * its META section read and checked, and its parameter hash equal to the
+ * header's. SG_ERR_UNSUPPORTED for a META layout of another splatgi (an
+ * older estimator: bake again), SG_ERR_CORRUPT otherwise. For caches that
+ * decide whether a file on disk is still current (app/bake_cache.h). */
+sg_status sg_bake_file_desc(const sg_bake_file *f, const char *path, sg_bake_desc *out, sg_error *err);
 
 /* Writes job j (bake_job.h), stopped or not yet run, to path atomically,
  * flagged SG_BAKE_FLAG_CHECKPOINT (sections above). */

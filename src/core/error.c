@@ -1,18 +1,58 @@
-/* error.c — see error.h. */
+/* error.c — see error.h.
+ *
+ * A message that does not fit SG_ERROR_MESSAGE_MAX keeps its head and its
+ * tail with "..." between: messages read "<file>: <element>: <fault>", so a
+ * cut at the end would drop the fault (and a path's extension) exactly when
+ * a long path or value makes the message long.
+ */
 #include "core/error.h"
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Bytes of the head kept when a message is cut; the tail gets the rest. */
+#define CUT_HEAD 200
+#define CUT_MARK "..."
+
+static int utf8_continuation(char c) { return ((unsigned char)c & 0xC0u) == 0x80u; }
+
+/* Head and tail of full (length n >= SG_ERROR_MESSAGE_MAX) into out, cut
+ * on UTF-8 character boundaries. */
+static void cut_middle(const char *full, size_t n, char *out)
+{
+    size_t mark = sizeof CUT_MARK - 1;
+    size_t head = CUT_HEAD, tail = SG_ERROR_MESSAGE_MAX - 1 - CUT_HEAD - mark;
+    while (head > 0 && utf8_continuation(full[head]))
+        --head; /* full[head] is the first byte not kept */
+    size_t from = n - tail;
+    while (from < n && utf8_continuation(full[from]))
+        ++from;
+    memcpy(out, full, head);
+    memcpy(out + head, CUT_MARK, mark);
+    memcpy(out + head + mark, full + from, n - from + 1);
+}
 
 sg_status sg_error_set(sg_error *err, sg_status status, const char *fmt, ...)
 {
-    if (err) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err->message, sizeof err->message, fmt, ap);
-        va_end(ap);
-        err->status = status;
+    if (!err)
+        return status;
+    va_list ap, ap2;
+    va_start(ap, fmt);
+    va_copy(ap2, ap);
+    int n = vsnprintf(err->message, sizeof err->message, fmt, ap);
+    va_end(ap);
+    if (n >= (int)sizeof err->message) {
+        /* Format the whole message once more to keep its tail; without
+         * memory for that, the head alone (vsnprintf's cut) stays. */
+        char *full = malloc((size_t)n + 1);
+        if (full && vsnprintf(full, (size_t)n + 1, fmt, ap2) == n)
+            cut_middle(full, (size_t)n, err->message);
+        free(full);
     }
+    va_end(ap2);
+    err->status = status;
     return status;
 }
 

@@ -27,7 +27,10 @@ typedef struct sg_error {
 } sg_error;
 
 /* Fills err (if non-NULL) with status and a printf-style message; returns
- * status so that error paths read `return sg_error_set(err, ...);`. */
+ * status so that error paths read `return sg_error_set(err, ...);`. A
+ * message longer than SG_ERROR_MESSAGE_MAX - 1 bytes keeps its first 200
+ * bytes and its end, joined by "...", cut on UTF-8 character boundaries:
+ * the fault at the end of "<very long path>: cannot open: ..." survives. */
 sg_status sg_error_set(sg_error *err, sg_status status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))

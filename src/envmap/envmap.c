@@ -1,18 +1,31 @@
-/* envmap.c — lat-long environment map: lookup, importance sampling
- * (pbrt-v4 4th ed. §12.5.2 "Image Infinite Lights" and §A.5 piecewise
- * constant 2D distributions), inverse warp and integrals.
+/* envmap.c — lat-long environment map: bilinear lookup, importance
+ * sampling (pbrt-v4 4th ed. §12.5.2 "Image Infinite Lights" and §A.5
+ * piecewise constant 2D distributions), inverse warp and integrals.
  *
- * One deviation from pbrt: pbrt samples (u, v) uniformly inside the chosen
- * texel and weights rows by sin(theta) at the row centre, so its
- * solid-angle pdf varies as 1/sin(theta) inside a texel. Here rows are
- * weighted by their exact solid angle and the direction is uniform in
- * (cos theta, phi) inside the texel, so pdf = lum(texel) / P exactly and
- * the lookup and the pdf are the same piecewise-constant function.
+ * Lookup: bilinear between texel centres, as Blender and pbrt look maps up
+ * (nearest texels made a 1k map behind a model look blocky).
+ * Sampling: piecewise constant per texel, as pbrt, with two deviations.
+ * (1) pbrt samples (u, v) uniformly inside the chosen texel and weights
+ * rows by sin(theta) at the row centre, so its solid-angle pdf varies as
+ * 1/sin(theta) inside a texel; here rows are weighted by their exact solid
+ * angle and the direction is uniform in (cos theta, phi) inside the texel,
+ * so the pdf is constant on a texel. (2) A texel's weight is not its own
+ * luminance but the largest luminance the bilinear lookup takes inside it
+ * (a bilinear function peaks at a corner of each quadrant: the centre, the
+ * edge midpoints or the corners, so 9 candidate points). Hence
+ *     pdf(d) > 0 wherever eval(d) != 0   (a black texel next to a lit one
+ *                                         is lit near their border), and
+ *     lum(eval(d)) / pdf(d) <= W_total   (no firefly from the lookup
+ *                                         rising inside a texel),
+ * W_total = sum of weight x texel solid angle (info.sampling_power).
  *
  * Invariants:
- *  1. rgb holds finite values >= 0 (clamped at creation, intensity applied).
+ *  1. rgb holds finite values >= 0 (clamped at creation), before intensity
+ *     (applied after interpolating, so scaling a map scales every lookup
+ *     exactly); weight holds each texel's sampling weight (2) above.
  *  2. marg[0] = 0, marg[H] = 1, nondecreasing; the same for each row of
- *     cond (W+1 entries); a black row has the uniform CDF i/W.
+ *     cond (W+1 entries), both over weight x solid angle; a row of zero
+ *     weight has the uniform CDF i/W.
  *  3. find_cell returns a cell of positive width whenever the CDF has one
  *     (largest k with cdf[k] <= u), so a zero-weight row or texel is never
  *     drawn.
@@ -20,10 +33,13 @@
  *     function eval and pdf use) is the texel it drew: the sampled pdf and
  *     sg_envmap_pdf agree bit for bit.
  *  5. power == 0 exactly when every texel is black (uniform fallback).
+ *  6. power_rgb is the exact integral of the bilinear lookup over the
+ *     sphere (closed form per row of texel centres, integrate_rows).
  */
 #include "envmap/envmap.h"
 
 #include <assert.h>
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -45,13 +61,16 @@
 struct sg_envmap {
     int width, height;    /* W, H texels                                     */
     float *rgb;           /* 3 W H radiance, row 0 top, invariant 1           */
+    float *weight;        /* W H sampling weights, invariant 1                */
+    float intensity;      /* applied after interpolation (invariant 1)       */
     double *cond;         /* H rows of W+1 conditional CDF entries (inv. 2)  */
     double *marg;         /* H+1 marginal CDF entries over rows (inv. 2)     */
     double *row_cos;      /* H+1 values cos(pi j / H): row j spans [j+1, j]  */
-    double power;         /* P = sum lum dOmega (invariant 5)                */
+    double power;         /* P = sum weight dOmega (invariant 5)             */
     float inv_power;      /* 1 / P, or 0 in the uniform fallback             */
     float cos_rot, sin_rot; /* rotation about +Y (header "Rotation")        */
-    sg_vec3 power_rgb;    /* sum rgb dOmega, per channel                      */
+    sg_vec3 power_rgb;    /* integral of the lookup, per channel (inv. 6)    */
+    double power_rgb_d[3];/* the same in double, for the overflow check      */
     sg_envmap_info info;  /* what creation found                              */
 };
 
@@ -162,26 +181,70 @@ sg_vec3 sg_envmap_uv_to_dir(const sg_envmap *m, float u, float v)
 
 /* ---- lookup ------------------------------------------------------------------ */
 
-static inline float texel_lum(const sg_envmap *m, int i, int j)
+static inline const float *texel(const sg_envmap *m, int i, int j)
 {
-    const float *p = m->rgb + 3 * ((size_t)j * (size_t)m->width + (size_t)i);
-    return LUM_R * p[0] + LUM_G * p[1] + LUM_B * p[2];
+    return m->rgb + 3 * ((size_t)j * (size_t)m->width + (size_t)i);
 }
 
 static inline float texel_pdf(const sg_envmap *m, int i, int j)
 {
     if (m->info.uniform_fallback)
         return (float)(1.0 / (4.0 * SG_PI));
-    return texel_lum(m, i, j) * m->inv_power;
+    return m->weight[(size_t)j * (size_t)m->width + (size_t)i] * m->inv_power;
+}
+
+/* Bilinear lookup at map coordinates (u, v) in [0, 1]^2, before intensity:
+ * between texel centres ((i + 0.5) / W, (j + 0.5) / H), wrapping in u and
+ * clamping in v (above the first row's centres and below the last row's
+ * the value is their row's). */
+static inline void bilerp(const sg_envmap *m, float u, float v, float out[3])
+{
+    const int W = m->width, H = m->height;
+    float x = u * (float)W - 0.5f, y = v * (float)H - 0.5f;
+    float fx = floorf(x);
+    float s = x - fx;
+    int i0 = (int)fx, i1 = i0 + 1;
+    if (i0 < 0)
+        i0 += W;
+    if (i0 >= W)
+        i0 -= W;
+    if (i1 >= W)
+        i1 -= W;
+    int j0, j1;
+    float t;
+    if (!(y > 0.0f)) { /* NaN-safe: cannot occur after map_uv */
+        j0 = j1 = 0;
+        t = 0.0f;
+    } else if (y >= (float)(H - 1)) {
+        j0 = j1 = H - 1;
+        t = 0.0f;
+    } else {
+        j0 = (int)y;
+        j1 = j0 + 1;
+        t = y - (float)j0;
+    }
+    const float *a = texel(m, i0, j0), *b = texel(m, i1, j0), *c = texel(m, i0, j1), *d = texel(m, i1, j1);
+    for (int k = 0; k < 3; k++) {
+        float top = a[k] + s * (b[k] - a[k]), bottom = c[k] + s * (d[k] - c[k]);
+        float r = top + t * (bottom - top);
+        out[k] = r > 0.0f ? r : 0.0f; /* rounding of the differences */
+    }
 }
 
 sg_vec3 sg_envmap_eval(const sg_envmap *m, sg_vec3 dir)
 {
     assert(m);
-    int i, j;
-    texel_of(m, dir, &i, &j);
-    const float *p = m->rgb + 3 * ((size_t)j * (size_t)m->width + (size_t)i);
-    return sg_v3(p[0], p[1], p[2]);
+    float u, v, L[3];
+    map_uv(to_map(m, dir), &u, &v);
+    bilerp(m, u, v, L);
+    return sg_v3(L[0] * m->intensity, L[1] * m->intensity, L[2] * m->intensity);
+}
+
+sg_vec3 sg_envmap_texel(const sg_envmap *m, int i, int j)
+{
+    assert(m && i >= 0 && i < m->width && j >= 0 && j < m->height);
+    const float *p = texel(m, i, j);
+    return sg_v3(p[0] * m->intensity, p[1] * m->intensity, p[2] * m->intensity);
 }
 
 float sg_envmap_pdf(const sg_envmap *m, sg_vec3 dir)
@@ -310,34 +373,62 @@ sg_vec3 sg_envmap_mean_radiance(const sg_envmap *m)
 sg_vec3 sg_envmap_irradiance(const sg_envmap *m, sg_vec3 n)
 {
     assert(m);
-    enum { SUB = 4 }; /* subcells per texel side: see the header's error bound */
-    const int W = m->width, H = m->height;
+    enum { SUB = 4, BLOCK = 512 }; /* subcells per texel side (header's bound); subcolumns a block */
+    const int W = m->width, H = m->height, SW = SUB * W;
     sg_vec3 nm = sg_v3_normalize(to_map(m, n));
-    /* cos(phi), sin(phi) of every subcolumn centre, shared by all rows. */
     double sum[3] = {0, 0, 0};
-    for (int j = 0; j < H; j++) {
-        double c0 = m->row_cos[j], c1 = m->row_cos[j + 1];
-        double d_omega = (c0 - c1) * (2.0 * SG_PI / W) / (SUB * SUB); /* per subcell */
-        for (int i = 0; i < W; i++) {
-            double cos_sum = 0.0; /* sum of max(0, n.w) over the subcells */
+    /* Subcolumns in blocks, each block's cos and sin of phi and bilinear
+     * neighbours in u (bilerp's rule, wrapping) computed once for all rows. */
+    double cs[BLOCK][2];
+    int col[BLOCK][2];
+    float cw[BLOCK];
+    for (int k0 = 0; k0 < SW; k0 += BLOCK) {
+        int nk = SW - k0 < BLOCK ? SW - k0 : BLOCK;
+        for (int b = 0; b < nk; b++) {
+            double uu = ((double)(k0 + b) + 0.5) / SW, phi = 2.0 * SG_PI * (uu - 0.5);
+            cs[b][0] = cos(phi);
+            cs[b][1] = sin(phi);
+            float x = (float)uu * (float)W - 0.5f, fx = floorf(x);
+            int i0 = (int)fx;
+            col[b][0] = i0 < 0 ? i0 + W : i0;
+            col[b][1] = i0 + 1 >= W ? i0 + 1 - W : i0 + 1;
+            cw[b] = x - fx;
+        }
+        for (int j = 0; j < H; j++) {
+            double c0 = m->row_cos[j], c1 = m->row_cos[j + 1];
+            double d_omega = (c0 - c1) * (2.0 * SG_PI / W) / (SUB * SUB); /* per subcell */
             for (int sj = 0; sj < SUB; sj++) {
                 double c = c0 + (c1 - c0) * (sj + 0.5) / SUB;
-                double s = sqrt(fmax(0.0, 1.0 - c * c));
-                for (int si = 0; si < SUB; si++) {
-                    double phi = 2.0 * SG_PI * (((double)i + (si + 0.5) / SUB) / W - 0.5);
-                    double dot = nm.x * s * cos(phi) + nm.y * c + nm.z * s * sin(phi);
-                    if (dot > 0.0)
-                        cos_sum += dot;
+                double st = sqrt(fmax(0.0, 1.0 - c * c));
+                /* bilerp's rows and weight at this subrow (clamped in v) */
+                float y = (float)(acos(c) / SG_PI) * (float)H - 0.5f, t = 0.0f;
+                int j0, j1;
+                if (!(y > 0.0f)) {
+                    j0 = j1 = 0;
+                } else if (y >= (float)(H - 1)) {
+                    j0 = j1 = H - 1;
+                } else {
+                    j0 = (int)y;
+                    j1 = j0 + 1;
+                    t = y - (float)j0;
                 }
-            }
-            if (cos_sum > 0.0) {
-                const float *p = m->rgb + 3 * ((size_t)j * (size_t)W + (size_t)i);
-                for (int k = 0; k < 3; k++)
-                    sum[k] += p[k] * cos_sum * d_omega;
+                for (int b = 0; b < nk; b++) {
+                    double dot = nm.x * st * cs[b][0] + nm.y * c + nm.z * st * cs[b][1];
+                    if (!(dot > 0.0))
+                        continue;
+                    const float *p00 = texel(m, col[b][0], j0), *p10 = texel(m, col[b][1], j0);
+                    const float *p01 = texel(m, col[b][0], j1), *p11 = texel(m, col[b][1], j1);
+                    float s = cw[b];
+                    for (int q = 0; q < 3; q++) {
+                        float top = p00[q] + s * (p10[q] - p00[q]), bottom = p01[q] + s * (p11[q] - p01[q]);
+                        float L = top + t * (bottom - top);
+                        sum[q] += (L > 0.0f ? L : 0.0f) * dot * d_omega;
+                    }
+                }
             }
         }
     }
-    return sg_v3((float)sum[0], (float)sum[1], (float)sum[2]);
+    return sg_v3((float)(sum[0] * m->intensity), (float)(sum[1] * m->intensity), (float)(sum[2] * m->intensity));
 }
 
 /* ---- creation ---------------------------------------------------------------------- */
@@ -353,20 +444,22 @@ void sg_envmap_destroy(sg_envmap *m)
     if (!m)
         return;
     sg_free(m->rgb);
+    sg_free(m->weight);
     sg_free(m->cond);
     sg_free(m->marg);
     sg_free(m->row_cos);
     sg_free(m);
 }
 
-/* Copies the image, clamps bad values, applies intensity (invariant 1). */
+/* Copies the image and clamps bad values (invariant 1); checks that the
+ * intensity does not overflow a texel; counts what it changed. */
 static sg_status copy_texels(sg_envmap *m, const sg_image *img, float intensity, const char *name,
                              sg_error *err)
 {
     size_t n = (size_t)img->width * (size_t)img->height;
     float max_value = 0.0f, min_value = 0.0f;
     for (size_t t = 0; t < n; t++) {
-        int negative = 0, nonfinite = 0;
+        int negative = 0, nonfinite = 0, positive = 0;
         for (int c = 0; c < 3; c++) {
             float x = img->data[3 * t + c];
             if (!isfinite(x)) {
@@ -378,22 +471,103 @@ static sg_status copy_texels(sg_envmap *m, const sg_image *img, float intensity,
                     min_value = x;
                 x = 0.0f;
             }
-            x *= intensity;
-            if (!isfinite(x))
+            positive |= x > 0.0f;
+            if (!isfinite(x * intensity))
                 return sg_error_set(err, SG_ERR_INVALID_ARG,
                                     "%s: texel (%zu, %zu): intensity %g makes the value %g overflow",
                                     name, t % (size_t)img->width, t / (size_t)img->width,
                                     (double)intensity, (double)img->data[3 * t + c]);
-            if (x > max_value)
-                max_value = x;
+            if (x * intensity > max_value)
+                max_value = x * intensity;
             m->rgb[3 * t + c] = x;
         }
         m->info.negative_texels += (size_t)negative;
         m->info.nonfinite_texels += (size_t)nonfinite;
+        m->info.positive_texels += (size_t)positive;
     }
     m->info.min_value = min_value;
     m->info.max_value = max_value;
     return SG_OK;
+}
+
+static inline double lum_at(const sg_envmap *m, int i, int j)
+{
+    const float *p = texel(m, i, j);
+    return (double)LUM_R * p[0] + (double)LUM_G * p[1] + (double)LUM_B * p[2];
+}
+
+/* Sampling weight of every texel: the largest luminance the bilinear
+ * lookup takes in it (header deviation 2). Neighbours wrap in u and clamp
+ * in v, as bilerp does. */
+static void build_weights(sg_envmap *m)
+{
+    const int W = m->width, H = m->height;
+    for (int j = 0; j < H; j++) {
+        int ju = j > 0 ? j - 1 : 0, jd = j + 1 < H ? j + 1 : H - 1;
+        for (int i = 0; i < W; i++) {
+            int il = i > 0 ? i - 1 : W - 1, ir = i + 1 < W ? i + 1 : 0;
+            double c = lum_at(m, i, j), l = lum_at(m, il, j), r = lum_at(m, ir, j);
+            double up = lum_at(m, i, ju), dn = lum_at(m, i, jd);
+            double w = c;
+            const double edge[4] = {l, r, up, dn};
+            for (int k = 0; k < 4; k++)
+                w = fmax(w, 0.5 * (c + edge[k]));
+            w = fmax(w, 0.25 * (c + l + up + lum_at(m, il, ju)));
+            w = fmax(w, 0.25 * (c + r + up + lum_at(m, ir, ju)));
+            w = fmax(w, 0.25 * (c + l + dn + lum_at(m, il, jd)));
+            w = fmax(w, 0.25 * (c + r + dn + lum_at(m, ir, jd)));
+            /* Rounded up to a float, so the bound of the header holds. */
+            float f = (float)w;
+            if ((double)f < w)
+                f = nextafterf(f, INFINITY);
+            m->weight[(size_t)j * (size_t)W + (size_t)i] = f;
+        }
+    }
+}
+
+/* pi x integral over [a, b] of the linear function through (a, ya) and
+ * (b, yb) times sin(pi v): the solid angle per unit u a hat-shaped weight
+ * sweeps (dOmega = 2 pi du . pi sin(pi v) dv). The differences are written
+ * without cancellation-prone cos(a) - cos(b). */
+static double weighted_band(double a, double b, double ya, double yb)
+{
+    if (!(b > a))
+        return 0.0;
+    const double pi = SG_PI, h = b - a;
+    /* int_a^b sin(pi v) dv = 2 sin(pi (a + b) / 2) sin(pi h / 2) / pi */
+    double i0 = 2.0 * sin(pi * (a + b) / 2.0) * sin(pi * h / 2.0) / pi;
+    /* int_a^b (v - a) sin(pi v) dv = -h cos(pi b) / pi + (sin pi b - sin pi a) / pi^2 */
+    double i1 = -h * cos(pi * b) / pi + 2.0 * cos(pi * (a + b) / 2.0) * sin(pi * h / 2.0) / (pi * pi);
+    return pi * (ya * i0 + (yb - ya) / h * i1);
+}
+
+/* Exact integral of the bilinear lookup (invariant 6). In u the linear
+ * interpolation of a periodic row integrates to the row's mean; in v the
+ * lookup is sum_j row_j h_j(v) with hat functions h_j between the centres
+ * v_j = (j + 0.5) / H, flat above v_0 and below v_H-1. */
+static void integrate_rows(sg_envmap *m)
+{
+    const int W = m->width, H = m->height;
+    double p[3] = {0, 0, 0};
+    for (int j = 0; j < H; j++) {
+        double vj = (j + 0.5) / H, omega = 0.0;
+        if (j == 0)
+            omega += weighted_band(0.0, vj, 1.0, 1.0);
+        else
+            omega += weighted_band((j - 0.5) / H, vj, 0.0, 1.0);
+        if (j == H - 1)
+            omega += weighted_band(vj, 1.0, 1.0, 1.0);
+        else
+            omega += weighted_band(vj, (j + 1.5) / H, 1.0, 0.0);
+        double row[3] = {0, 0, 0};
+        for (int i = 0; i < W; i++)
+            for (int c = 0; c < 3; c++)
+                row[c] += texel(m, i, j)[c];
+        for (int c = 0; c < 3; c++)
+            p[c] += row[c] / W * 2.0 * SG_PI * omega;
+    }
+    for (int c = 0; c < 3; c++)
+        m->power_rgb_d[c] = p[c] * m->intensity;
 }
 
 /* Builds row_cos, cond, marg, power (invariants 2 and 5). */
@@ -404,19 +578,17 @@ static void build_tables(sg_envmap *m)
         m->row_cos[j] = cos(SG_PI * j / H);
     m->row_cos[0] = 1.0;
     m->row_cos[H] = -1.0;
-    double power = 0.0, prgb[3] = {0, 0, 0};
+    double power = 0.0;
     m->marg[0] = 0.0;
     for (int j = 0; j < H; j++) {
         double d_omega = (m->row_cos[j] - m->row_cos[j + 1]) * (2.0 * SG_PI / W);
         double *row = m->cond + (size_t)j * (size_t)(W + 1);
+        const float *wt = m->weight + (size_t)j * (size_t)W;
         double acc = 0.0;
         row[0] = 0.0;
         for (int i = 0; i < W; i++) {
-            const float *p = m->rgb + 3 * ((size_t)j * (size_t)W + (size_t)i);
-            acc += (double)texel_lum(m, i, j);
+            acc += (double)wt[i];
             row[i + 1] = acc;
-            for (int c = 0; c < 3; c++)
-                prgb[c] += (double)p[c] * d_omega;
         }
         if (acc > 0.0) {
             for (int i = 1; i < W; i++)
@@ -440,8 +612,14 @@ static void build_tables(sg_envmap *m)
     m->power = power;
     m->inv_power = power > 0.0 ? (float)(1.0 / power) : 0.0f;
     m->info.uniform_fallback = !(power > 0.0);
-    m->power_rgb = sg_v3((float)prgb[0], (float)prgb[1], (float)prgb[2]);
+    m->info.sampling_power = (float)power;
+    integrate_rows(m);
+    m->power_rgb = sg_v3((float)m->power_rgb_d[0], (float)m->power_rgb_d[1], (float)m->power_rgb_d[2]);
 }
+
+/* Light values are summed over many photons and samples: keep 2^24 of
+ * float's range free above a map's power. */
+#define POWER_MAX (FLT_MAX / 16777216.0)
 
 sg_status sg_envmap_create(const sg_envmap_desc *desc, sg_envmap **out, sg_error *err)
 {
@@ -485,6 +663,7 @@ sg_status sg_envmap_create(const sg_envmap_desc *desc, sg_envmap **out, sg_error
     }
     if (!sg_mul_size(W, H, &texels) || !sg_mul_size(W + 1, H, &cond_count) ||
         !(m->rgb = sg_alloc_array(texels, 3 * sizeof(float))) ||
+        !(m->weight = sg_alloc_array(texels, sizeof(float))) ||
         !(m->cond = sg_alloc_array(cond_count, sizeof(double))) ||
         !(m->marg = sg_alloc_array(H + 1, sizeof(double))) ||
         !(m->row_cos = sg_alloc_array(H + 1, sizeof(double)))) {
@@ -493,6 +672,7 @@ sg_status sg_envmap_create(const sg_envmap_desc *desc, sg_envmap **out, sg_error
     }
     m->width = img->width;
     m->height = img->height;
+    m->intensity = intensity;
     m->info.width = img->width;
     m->info.height = img->height;
     double rot = (double)desc->rotation_deg * (SG_PI / 180.0);
@@ -502,7 +682,28 @@ sg_status sg_envmap_create(const sg_envmap_desc *desc, sg_envmap **out, sg_error
     st = copy_texels(m, img, intensity, name, err);
     if (st != SG_OK)
         goto fail;
+    /* A map read from a file with nothing finite and positive in it (all
+     * NaN, say) would light the scene black without a word: refuse it. An
+     * image made in memory may be black on purpose (a dark sky). */
+    if (desc->path && m->info.positive_texels == 0) {
+        st = sg_error_set(err, SG_ERR_CORRUPT,
+                          "%s: no texel has a finite positive value (%zu of %zu texels NaN or infinite, %zu "
+                          "negative): not a usable environment map",
+                          name, m->info.nonfinite_texels, texels, m->info.negative_texels);
+        goto fail;
+    }
+    build_weights(m);
     build_tables(m);
+    double worst = m->power * intensity; /* the sampling weights' power bounds f / pdf */
+    for (int c = 0; c < 3; c++)
+        worst = fmax(worst, m->power_rgb_d[c]);
+    if (!(worst <= POWER_MAX)) {
+        st = sg_error_set(err, SG_ERR_INVALID_ARG,
+                          "%s: the map's power (radiance over the sphere, intensity %g applied) is %.3g, more than "
+                          "sums of light values can hold (%.3g); its largest texel is %.3g",
+                          name, (double)intensity, worst, (double)POWER_MAX, (double)m->info.max_value);
+        goto fail;
+    }
     sg_image_free(&loaded);
     *out = m;
     return SG_OK;

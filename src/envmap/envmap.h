@@ -5,9 +5,9 @@
  * probability proportional to that radiance (its luminance), with the
  * matching pdf and the inverse warp. It is shared by the baker, the viewer
  * and the reference renderer (DESIGN.md: one way to sample the envmap).
- * What it does NOT do: filtering (no bilinear, no mip-maps), colour
- * management (values are taken as scene-linear Rec.709), analytic sky
- * models (see analytic.h, which makes images for sg_envmap_create).
+ * What it does NOT do: mip-maps or prefiltering, colour management
+ * (values are taken as scene-linear Rec.709), analytic sky models (see
+ * analytic.h, which makes images for sg_envmap_create).
  *
  * Mapping (DESIGN.md "Conventions"; right-handed, +Y up). A unit direction
  * d in map space has
@@ -28,31 +28,45 @@
  * -x sin a + z cos a). So world direction w looks up map direction
  * R_y(-angle) w, i.e. u_map = u_world + angle / 360 deg (mod 1).
  *
- * Radiance: piecewise constant, nearest texel: sg_envmap_eval(d) is the
- * texel containing d times desc.intensity. Nearest (not bilinear) so that
- * the sampling pdf below is exactly proportional to the luminance of what
- * eval returns: f/pdf has no variance from texel-interior mismatch, and
- * pdf > 0 wherever eval != 0 (unbiased).
+ * Radiance: bilinear between texel centres (as Blender and pbrt look maps
+ * up): with x = u W - 0.5, y = v H - 0.5, i = floor(x), s = x - i,
+ * j = floor(y), t = y - j,
+ *     eval(d) = intensity x [(1-t)((1-s) T(i,j) + s T(i+1,j))
+ *                            + t ((1-s) T(i,j+1) + s T(i+1,j+1))],
+ * columns wrapping (i = -1 is W-1, i = W is 0), rows clamped (above the
+ * centres of row 0 and below those of row H-1 the lookup is that row's, in
+ * u only). At a texel centre it is the texel; sg_envmap_texel reads texels
+ * exactly.
  *
  * Sampling (a 2D piecewise-constant distribution, pbrt-v4
- * PiecewiseConstant2D, in the coordinates (cos theta, phi)): the marginal
- * CDF picks row j with probability proportional to
- *     sum_i lum(i, j) * dOmega_j,  dOmega_j = (2 pi / W)(cos(pi j/H) - cos(pi (j+1)/H)),
- * i.e. luminance times sin(theta) integrated over the row (its exact texel
- * solid angle); the row's conditional CDF picks column i proportional to
- * lum(i, j); inside the texel the direction is uniform in solid angle
- * (linear in cos theta and phi). Hence the solid-angle pdf is
- *     pdf(d) = lum(texel of d) / P,   P = sum_ij lum(i, j) dOmega_j,
- * with lum = 0.2126 R + 0.7152 G + 0.0722 B (Rec.709). u1 picks the row
- * (theta), u2 the column (phi); both warps are monotone and continuous, so
- * sg_envmap_invert(sample(u1, u2)) = (u1, u2) up to rounding.
+ * PiecewiseConstant2D, in the coordinates (cos theta, phi)): texel (i, j)
+ * has the weight w(i, j) = the largest luminance the bilinear lookup takes
+ * inside it (found at the centre, the edge midpoints or the corners:
+ * averages of the texel and its 8 neighbours). The marginal CDF picks row j
+ * with probability proportional to
+ *     sum_i w(i, j) * dOmega_j,  dOmega_j = (2 pi / W)(cos(pi j/H) - cos(pi (j+1)/H)),
+ * the row's conditional CDF picks column i proportional to w(i, j); inside
+ * the texel the direction is uniform in solid angle (linear in cos theta
+ * and phi). Hence the solid-angle pdf is constant on a texel:
+ *     pdf(d) = w(texel of d) / P_w,   P_w = sum_ij w(i, j) dOmega_j,
+ * with lum = 0.2126 R + 0.7152 G + 0.0722 B (Rec.709), and
+ *     pdf(d) > 0 wherever eval(d) != 0, and lum(eval(d)) / pdf(d) <= P_w x
+ *     intensity (info.sampling_power): the estimator L / pdf is bounded.
+ * u1 picks the row (theta), u2 the column (phi); both warps are monotone
+ * and continuous, so sg_envmap_invert(sample(u1, u2)) = (u1, u2) up to
+ * rounding.
  * All-black map (P = 0): sampling falls back to the uniform sphere,
  * cos theta = 1 - 2 u1, u = u2, pdf = 1 / (4 pi) everywhere (which is also
  * exactly what a constant map gives); info.uniform_fallback says so.
  *
  * Texels: negative, NaN and infinite channel values are set to 0 at
  * creation (lossy EXR codecs leave small negatives; a NaN would poison every
- * sum); info counts the texels concerned.
+ * sum); info counts the texels concerned. A map read from a file (desc.path)
+ * with no finite positive value at all is refused (SG_ERR_CORRUPT): an
+ * all-NaN file would otherwise light a scene black without a word. Any map
+ * whose power (or P_w) exceeds FLT_MAX / 2^24 is refused
+ * (SG_ERR_INVALID_ARG): sums of light values over photons and samples
+ * would overflow to infinity.
  *
  * Walkthrough:
  *     sg_envmap *env;
@@ -63,12 +77,14 @@
  *     sg_vec3 L = sg_envmap_eval(env, w);                // estimate += L * f / pdf
  *     sg_envmap_destroy(env);
  *
- * Memory: the map copies the image (12 bytes a texel) and keeps the CDFs in
- * double (8 bytes a texel: a texel 1e-12 of its row still gets a cell of
- * positive width, so every lit texel can be drawn). sg_envmap_destroy frees
+ * Memory: the map copies the image (12 bytes a texel), keeps the sampling
+ * weights (4 bytes a texel) and the CDFs in double (8 bytes a texel: a
+ * texel 1e-12 of its row still gets a cell of positive width, so every lit
+ * texel can be drawn). sg_envmap_destroy frees
  * all. Thread-safety: every query takes a const map and is thread-safe.
  * Errors (create only): SG_ERR_INVALID_ARG (no image and no path, bad
- * rotation or intensity, intensity overflowing a texel to infinity), the
+ * rotation or intensity, intensity overflowing a texel to infinity, power
+ * overflowing), SG_ERR_CORRUPT (a file with no finite positive texel), the
  * readers' codes for a path (SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED),
  * SG_ERR_NOMEM.
  */
@@ -96,9 +112,13 @@ typedef struct sg_envmap_info {
     int width, height;       /* texels                                     */
     size_t negative_texels;  /* texels with a channel < 0, set to 0        */
     size_t nonfinite_texels; /* texels with a NaN or +-Inf channel, set 0  */
+    size_t positive_texels;  /* texels with a finite channel > 0           */
     float min_value;         /* most negative stored value (0 if none)     */
     float max_value;         /* largest channel after clamp and intensity  */
     int uniform_fallback;    /* 1: every texel black, sampling is uniform  */
+    float sampling_power;    /* P_w (before intensity): sum of the texels'
+                                sampling weights x solid angle; bounds
+                                lum(eval) / pdf (see Sampling)             */
 } sg_envmap_info;
 
 /* Reads a lat-long image by extension: ".exr" (sg_exr_read, any
@@ -123,8 +143,12 @@ void sg_envmap_dir_to_uv(const sg_envmap *m, sg_vec3 dir, float *u, float *v);
 sg_vec3 sg_envmap_uv_to_dir(const sg_envmap *m, float u, float v);
 
 /* Radiance arriving from world direction dir (towards the map), including
- * intensity; >= 0 and finite. */
+ * intensity; >= 0 and finite. Bilinear (see Radiance). */
 sg_vec3 sg_envmap_eval(const sg_envmap *m, sg_vec3 dir);
+
+/* Texel (i, j) as stored (clamped, intensity applied): column i in [0, W),
+ * row j in [0, H), row 0 the top. */
+sg_vec3 sg_envmap_texel(const sg_envmap *m, int i, int j);
 
 /* Draws a unit world direction for (u1, u2) in [0, 1)^2; *pdf (solid
  * angle, sr^-1) is > 0 and equals sg_envmap_pdf(m, result) exactly (the
@@ -139,9 +163,10 @@ float sg_envmap_pdf(const sg_envmap *m, sg_vec3 dir);
  * black texel, the value at which its zero-width CDF cell sits. */
 void sg_envmap_invert(const sg_envmap *m, sg_vec3 dir, float *u1, float *u2);
 
-/* Integral of the radiance over the sphere, per channel:
- * sum_ij L(i, j) dOmega_j (exact for the piecewise-constant map). Units:
- * radiance x sr; this is the "power" of pbrt's light tests. */
+/* Integral of the radiance (the bilinear lookup) over the sphere, per
+ * channel, in closed form: in u a row integrates to its mean, in v each
+ * row's hat function between texel centres is integrated against
+ * sin(theta). Units: radiance x sr; the "power" of pbrt's light tests. */
 sg_vec3 sg_envmap_power(const sg_envmap *m);
 
 /* Solid-angle mean of the radiance: sg_envmap_power / (4 pi). */
@@ -149,9 +174,10 @@ sg_vec3 sg_envmap_mean_radiance(const sg_envmap *m);
 
 /* Irradiance on a plane with unit normal n facing the map:
  * integral of L(w) max(0, n.w) dw, by the midpoint rule on 4 x 4 cells of
- * equal solid angle inside each texel (uniform in phi and cos theta). The
- * radiance is exact per texel, so the only error is the cosine's curvature
- * and the horizon cutting cells: relative error below 1e-3 for H >= 64.
+ * equal solid angle inside each texel (uniform in phi and cos theta), the
+ * lookup taken at each cell's centre. Relative error below 1e-3 for
+ * H >= 64 on smooth maps (the midpoint rule on a bilinear lookup and the
+ * cosine's curvature).
  * Cost O(16 W H); meant for tests and one-off normalisation. */
 sg_vec3 sg_envmap_irradiance(const sg_envmap *m, sg_vec3 n);
 

@@ -23,11 +23,11 @@ enum { MAX_BRIGHT = 1024 };
 static const double BRIGHT_SHARE = 1e-4;
 static const double BRIGHT_OVER_MEAN = 64.0; /* x the mean texel's power */
 
-/* Luminance of texel (i, j) of a W x H map, read through the public
- * mapping (rotation included both ways, so it is the stored texel). */
+/* Luminance of texel (i, j) as stored. */
 static double texel_lum(const sg_envmap *m, int i, int j, int W, int H)
 {
-    sg_vec3 L = sg_envmap_eval(m, sg_envmap_uv_to_dir(m, ((float)i + 0.5f) / (float)W, ((float)j + 0.5f) / (float)H));
+    (void)W, (void)H;
+    sg_vec3 L = sg_envmap_texel(m, i, j);
     return 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z;
 }
 
@@ -149,7 +149,9 @@ sg_status sg_irradiance_table_create(const sg_envmap *m, const sg_irradiance_tab
         for (int i = 0; i < GW; ++i) {
             float u = ((float)i + 0.5f) / (float)GW, v = ((float)j + 0.5f) / (float)GH;
             sg_vec3 w = sg_envmap_uv_to_dir(m, u, v);
-            sg_vec3 L = sg_envmap_eval(m, w);
+            /* The texel grid reads the texels themselves; a finer grid
+             * reads the bilinear lookup between them. */
+            sg_vec3 L = fine ? sg_envmap_texel(m, i, j) : sg_envmap_eval(m, w);
             if (fine && t->bright < bright_cap && (0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z) * dom > threshold) {
                 float *bw = t->bright_w + 3 * t->bright, *bp = t->bright_p + 3 * t->bright;
                 bw[0] = w.x; bw[1] = w.y; bw[2] = w.z;

@@ -28,7 +28,10 @@
  *  SG_ERR_IO          the file cannot be opened or read (an OS error);
  *  SG_ERR_CORRUPT     not an OpenEXR file, a header or pixel chunk the
  *                     library rejects, or a file with missing chunks
- *                     (truncated): the library's own message follows;
+ *                     (truncated): the library's own message follows; a
+ *                     data window too big for the file size (checked
+ *                     before any pixel is read: even at the compression's
+ *                     best ratio the pixels could not fit), naming both;
  *  SG_ERR_UNSUPPORTED see above; SG_ERR_NOMEM; SG_ERR_INVALID_ARG.
  * No C++ exception leaves this interface: each is caught and turned into
  * one of the codes above.

@@ -35,6 +35,7 @@
 #include <png.h>
 
 #include "core/alloc.h"
+#include "core/file_mode.h"
 
 sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err)
 {
@@ -51,6 +52,7 @@ sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err)
     img->width = width;
     img->height = height;
     img->data = data;
+    img->alpha = NULL; /* no coverage until a renderer gives one */
     return SG_OK;
 }
 
@@ -59,7 +61,9 @@ void sg_image_free(sg_image *img)
     if (!img)
         return;
     sg_free(img->data);
+    sg_free(img->alpha);
     img->data = NULL;
+    img->alpha = NULL;
     img->width = 0;
     img->height = 0;
 }
@@ -112,12 +116,13 @@ static void discard_temp(temp_file *t)
     t->name = NULL;
 }
 
-/* The temporary file is complete and closed (t->fd == -1): give it ordinary
- * permissions (mkstemp makes 0600) and move it over path. */
+/* The temporary file is complete and closed (t->fd == -1): give it the
+ * mode every output gets (core/file_mode.h; mkstemp makes 0600) and move
+ * it over path. */
 static sg_status finish_temp(temp_file *t, const char *path, sg_error *err)
 {
     assert(t->fd < 0 && t->name);
-    if (chmod(t->name, 0644) != 0 || rename(t->name, path) != 0) {
+    if (chmod(t->name, sg_output_file_mode(path)) != 0 || rename(t->name, path) != 0) {
         int e = errno;
         discard_temp(t);
         return sg_error_set(err, SG_ERR_IO, "%s: cannot move the finished file into place: %s",
@@ -257,12 +262,18 @@ static exr_result_t exr_write_pixels(exr_context_t ctx, const sg_image *img, con
             break;
         for (int c = 0; c < enc.channel_count; c++) {
             exr_coding_channel_info_t *ch = &enc.channels[c];
-            /* Channels come sorted by name (B, G, R). */
+            ch->user_bytes_per_element = (int16_t)sizeof(float);
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+            if (ch->channel_name[0] == 'A') { /* alpha: its own plane */
+                ch->user_pixel_stride = (int32_t)sizeof(float);
+                ch->user_line_stride = img->width * (int32_t)sizeof(float);
+                ch->encode_from_ptr = (const uint8_t *)(img->alpha + (size_t)cinfo.start_y * (size_t)img->width);
+                continue;
+            }
+            /* Channels come sorted by name (A, B, G, R). */
             int offset = ch->channel_name[0] == 'R' ? 0 : ch->channel_name[0] == 'G' ? 1 : 2;
             ch->user_pixel_stride = 3 * (int32_t)sizeof(float);
             ch->user_line_stride = (int32_t)row_bytes;
-            ch->user_bytes_per_element = (int16_t)sizeof(float);
-            ch->user_data_type = EXR_PIXEL_FLOAT;
             ch->encode_from_ptr =
                 (const uint8_t *)(img->data + (size_t)cinfo.start_y * (size_t)img->width * 3 + offset);
         }
@@ -320,6 +331,8 @@ sg_status sg_image_write_exr_desc(const sg_image *img, const char *path, const s
         rv = exr_add_channel(ctx, part, "G", ptype, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_add_channel(ctx, part, "B", ptype, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    if (rv == EXR_ERR_SUCCESS && img->alpha)
+        rv = exr_add_channel(ctx, part, "A", ptype, EXR_PERCEPTUALLY_LINEAR, 1, 1);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctx);
     if (rv != EXR_ERR_SUCCESS)
@@ -427,6 +440,12 @@ sg_status sg_image_read_exr(const char *path, sg_image *out, sg_error *err)
     st = sg_image_alloc(&img, (int)w64, (int)h64, err);
     if (st != SG_OK)
         goto done;
+    for (int i = 0; i < chl->num_channels; i++)
+        if (strcmp(chl->entries[i].name.str, "A") == 0 && chl->entries[i].x_sampling == 1 &&
+            chl->entries[i].y_sampling == 1 && !(img.alpha = sg_calloc_array((size_t)w64 * (size_t)h64, sizeof(float)))) {
+            st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for the alpha channel", path);
+            goto done;
+        }
 
     size_t row_bytes = (size_t)img.width * 3 * sizeof(float);
     for (int64_t y = dw.min.y; y <= dw.max.y; y += lines) {
@@ -454,6 +473,14 @@ sg_status sg_image_read_exr(const char *path, sg_image *out, sg_error *err)
             for (int k = 0; k < 3; k++)
                 if (strcmp(ch->channel_name, wanted[k]) == 0)
                     offset = k;
+            if (img.alpha && strcmp(ch->channel_name, "A") == 0) {
+                ch->user_pixel_stride = (int32_t)sizeof(float);
+                ch->user_line_stride = img.width * (int32_t)sizeof(float);
+                ch->user_bytes_per_element = (int16_t)sizeof(float);
+                ch->user_data_type = EXR_PIXEL_FLOAT;
+                ch->decode_to_ptr = (uint8_t *)(img.alpha + (size_t)row * (size_t)img.width);
+                continue;
+            }
             if (offset < 0) {
                 ch->decode_to_ptr = NULL; /* skipped by the decoder */
                 continue;
@@ -481,6 +508,7 @@ sg_status sg_image_read_exr(const char *path, sg_image *out, sg_error *err)
     }
     *out = img;
     img.data = NULL;
+    img.alpha = NULL;
     goto done;
 
 fail_exr:

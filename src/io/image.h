@@ -6,8 +6,13 @@
  * compressions the OpenEXR 3.1 core C API decodes (none, RLE, ZIPS, ZIP,
  * PIZ, PXR24, B44, B44A).
  * What it does NOT do: DWAA/DWAB decoding (SG_ERR_UNSUPPORTED here; a later
- * C++ reader handles them), tiled or deep or multi-part EXR reading, alpha,
- * colour management (PNG applies the plain sRGB OETF, no OCIO view).
+ * C++ reader handles them), tiled or deep or multi-part EXR reading, PNG
+ * alpha, colour management (PNG applies the plain sRGB OETF, no OCIO view).
+ *
+ * Alpha: an image may carry coverage, the share of each pixel where the
+ * camera sees a model (render/coverage.h); EXR files then get an "A"
+ * channel (unpremultiplied: RGB is the pixel's radiance, sky included, A
+ * how much of it is model), and the EXR reader fills alpha from one.
  *
  * Layout: pixel (x, y) is data[3 * (y * width + x) + c], c = 0 R, 1 G, 2 B;
  * row 0 is the top row; rows are tightly packed (stride 12 * width bytes);
@@ -31,19 +36,23 @@
 #include "core/error.h"
 
 typedef struct sg_image {
-    int width;   /* pixels per row, > 0 once allocated                 */
-    int height;  /* rows, > 0 once allocated                           */
-    float *data; /* 3 * width * height floats, RGB interleaved, row 0 top */
+    int width;    /* pixels per row, > 0 once allocated                 */
+    int height;   /* rows, > 0 once allocated                           */
+    float *data;  /* 3 * width * height floats, RGB interleaved, row 0 top */
+    float *alpha; /* width * height coverage values in [0,1], row 0 top;
+                     NULL: none (no A channel). Owned by the image
+                     (sg_alloc_array), freed by sg_image_free.             */
 } sg_image;
 
 /* Largest width or height accepted by sg_image_alloc and the readers. */
 #define SG_IMAGE_MAX_DIM 65536
 
 /* Allocates a zero-filled width x height image into *img (whose previous
- * contents are not freed). On failure *img is untouched. */
+ * contents are not freed), alpha NULL. On failure *img is untouched. */
 sg_status sg_image_alloc(sg_image *img, int width, int height, sg_error *err);
 
-/* Frees the pixels and zeroes the struct; NULL and zeroed images are fine. */
+/* Frees the pixels (and alpha) and zeroes the struct; NULL and zeroed
+ * images are fine. */
 void sg_image_free(sg_image *img);
 
 /* Pixel type of the channels an EXR file stores. */
@@ -64,7 +73,8 @@ typedef struct sg_exr_desc {
 } sg_exr_desc;
 
 /* Writes img as a single-part scanline EXR with channels R, G, B
- * (scene-linear values as given, NaN and Inf included). desc may be NULL. */
+ * (scene-linear values as given, NaN and Inf included), and A when
+ * img->alpha is set. desc may be NULL. */
 sg_status sg_image_write_exr_desc(const sg_image *img, const char *path,
                                   const sg_exr_desc *desc, sg_error *err);
 
@@ -85,8 +95,9 @@ sg_status sg_image_write(const sg_image *img, const char *path, float exposure,
 
 /* Reads a single-part scanline EXR with R, G and B channels (half, float or
  * uint, full resolution) into *out (allocated here; free with
- * sg_image_free). Other channels are ignored; the data window becomes the
- * image (its origin is dropped). On failure *out is untouched. */
+ * sg_image_free), and an A channel into out->alpha (NULL without one).
+ * Other channels are ignored; the data window becomes the image (its
+ * origin is dropped). On failure *out is untouched. */
 sg_status sg_image_read_exr(const char *path, sg_image *out, sg_error *err);
 
 #endif

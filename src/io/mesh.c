@@ -1,5 +1,6 @@
 /* mesh.c — model file entry point: picks the loader by file extension
- * (.ply -> ply.c, .obj -> obj.c, case-insensitive), frees meshes, and holds
+ * (.ply -> ply.c, .obj -> obj.c, .xyz/.txt -> xyz.c, .pcd -> pcd.c,
+ * case-insensitive), frees meshes, and holds
  * the two helpers both text formats share: reading a whole file and a
  * locale-independent number parser.
  *
@@ -20,7 +21,9 @@
 
 #include "core/alloc.h"
 #include "io/obj.h"
+#include "io/pcd.h"
 #include "io/ply.h"
+#include "io/xyz.h"
 
 /* Lower-cases ASCII only: extensions are ASCII and tolower() would consult
  * the caller's locale. */
@@ -52,9 +55,13 @@ sg_status sg_mesh_read(const char *path, sg_mesh *out, sg_error *err)
             return sg_ply_read(path, out, err);
         if (ext_is(dot + 1, "obj"))
             return sg_obj_read(path, out, err);
+        if (ext_is(dot + 1, "xyz") || ext_is(dot + 1, "txt"))
+            return sg_xyz_read(path, out, err);
+        if (ext_is(dot + 1, "pcd"))
+            return sg_pcd_read(path, out, err);
     }
     return sg_error_set(err, SG_ERR_UNSUPPORTED,
-                        "%s: unsupported model format (expected a .ply or .obj extension)", path);
+                        "%s: unsupported model format (expected a .ply, .obj, .xyz, .txt or .pcd extension)", path);
 }
 
 void sg_mesh_free(sg_mesh *mesh)

@@ -28,8 +28,8 @@ typedef struct sg_mesh {
     uint32_t *triangles;   /* 3*triangle_count vertex indices, or NULL    */
 } sg_mesh;
 
-/* Reads a .ply or .obj file (chosen by extension, case-insensitive) into
- * *out. On failure *out is untouched and err names the file, the element
+/* Reads a .ply (ply.h), .obj (obj.h), .xyz or .txt (xyz.h) or .pcd (pcd.h)
+ * file, chosen by extension (case-insensitive), into *out. On failure *out is untouched and err names the file, the element
  * and the fault. */
 sg_status sg_mesh_read(const char *path, sg_mesh *out, sg_error *err);
 

@@ -77,7 +77,7 @@ typedef struct obj_counts {
     size_t vn;        /* vn lines                  */
     size_t tri;        /* triangles after fanning    */
     size_t corners;    /* face corners, all f lines  */
-    size_t face_lines; /* f lines, degenerate or not */
+    size_t face_lines; /* f lines (one of fewer than 3 corners fails later) */
 } obj_counts;
 
 static void count_pass(const char *buf, size_t size, obj_counts *c)
@@ -253,6 +253,11 @@ static sg_status parse_face(const char *path, size_t line, obj_line *ln, const o
         prev = cur;
         corner++;
     }
+    /* "f 1 2" is no polygon; taking it quietly would leave a model whose
+     * faces are all like it as a cloud of its vertices. */
+    if (corner < 3)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: line %zu: face has %zu vertex ind%s; a face needs at least 3",
+                            path, line, corner, corner == 1 ? "ex" : "ices");
     return SG_OK;
 }
 

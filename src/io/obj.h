@@ -8,8 +8,8 @@
  *   f a b c ...       a polygon; each corner is i, i/t, i//n or i/t/n.
  *                     Indices count from 1; negative indices are relative
  *                     (-1 is the last v or vn defined so far). A polygon
- *                     v0 ... vn-1 becomes the fan (v0,vi,vi+1); faces with
- *                     fewer than 3 corners are dropped.
+ *                     v0 ... vn-1 becomes the fan (v0,vi,vi+1); a face
+ *                     with fewer than 3 corners is an error.
  *   Every other line (vt, vp, o, g, s, l, p, usemtl, mtllib, # comments)
  *   is ignored, as is anything after a '#' on a face line.
  *
@@ -23,7 +23,9 @@
  *
  * Errors: SG_ERR_IO when the file cannot be opened or read; SG_ERR_CORRUPT
  * for a malformed number, a vertex or normal with fewer than 3 coordinates,
- * a NaN/Inf coordinate, face index 0 or out of range, or no vertices;
+ * a NaN/Inf coordinate, face index 0 or out of range, a face of fewer than
+ * 3 corners ("line 4: face has 2 vertex indices; a face needs at least
+ * 3"), or no vertices;
  * SG_ERR_NOMEM when allocation fails; SG_ERR_UNSUPPORTED for 2^32 or more
  * vertices (triangle indices are uint32).
  * Messages name the file and the 1-based line:

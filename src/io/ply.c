@@ -22,9 +22,14 @@
  *     per step or has a bounded count (elements whose records take no
  *     bytes are skipped whole), so a hostile count cannot make it hang.
  *  4. Every triangle index is < vertex_count when stored.
+ *  5. Faces have at least 3 indices; a triangle strip (element tristrips,
+ *     -1 ends a strip) yields (v_k, v_k+1, v_k+2), the first two swapped
+ *     for odd k (the strip's winding kept), dropping the triangles with a
+ *     repeated vertex that strips use for stitching.
  */
 #include "io/ply.h"
 
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdint.h>
@@ -106,6 +111,8 @@ typedef struct ply_plan {
     size_t vertex_elem;                   /* index of "vertex" in elems[]        */
     size_t face_elem;                     /* index of "face", or SIZE_MAX        */
     size_t face_list;                     /* vertex_indices within face elem     */
+    size_t strip_elem;                    /* index of "tristrips", or SIZE_MAX   */
+    size_t strip_list;                    /* vertex_indices within strip elem    */
     unsigned char role[MAX_PROPERTIES];   /* role of each vertex property        */
     ply_type role_type[R_COUNT];          /* type of the property with that role */
     bool has_normals, has_colors, has_radius;
@@ -351,6 +358,34 @@ static vertex_role role_of(const char *name)
 
 static bool color_type_ok(ply_type t) { return t == T_U8 || t == T_U16 || t == T_F32 || t == T_F64; }
 
+/* The vertex_indices (or vertex_index) list of element e (SIZE_MAX: none)
+ * into *list; an element with records but no such list, or one of a
+ * non-integer type, is an error. */
+static sg_status find_index_list(const char *path, const ply_header *h, size_t e, size_t *list, sg_error *err)
+{
+    if (e == SIZE_MAX)
+        return SG_OK;
+    const ply_element *f = &h->elems[e];
+    for (size_t k = 0; k < f->prop_count; k++) {
+        const ply_prop *pr = &h->props[f->first_prop + k];
+        if (pr->count_type != T_NONE &&
+            (strcmp(pr->name, "vertex_indices") == 0 || strcmp(pr->name, "vertex_index") == 0)) {
+            *list = k;
+            break;
+        }
+    }
+    if (*list == SIZE_MAX && f->count > 0)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: header: %s: no vertex_indices list property", path,
+                            f->name);
+    if (*list != SIZE_MAX) {
+        const ply_prop *pr = &h->props[f->first_prop + *list];
+        if (!type_is_integer(pr->type))
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: header: %s: %s index type %s is not an integer type",
+                                path, f->name, pr->name, TYPE_NAMES[pr->type].name);
+    }
+    return SG_OK;
+}
+
 /* Decides what each vertex property feeds, finds the face index list and
  * checks the declared counts against the body size (invariant 1). */
 static sg_status plan_layout(const char *path, const ply_header *h, size_t file_size, ply_plan *pl, sg_error *err)
@@ -358,11 +393,15 @@ static sg_status plan_layout(const char *path, const ply_header *h, size_t file_
     pl->vertex_elem = SIZE_MAX;
     pl->face_elem = SIZE_MAX;
     pl->face_list = SIZE_MAX;
+    pl->strip_elem = SIZE_MAX;
+    pl->strip_list = SIZE_MAX;
     for (size_t i = 0; i < h->elem_count; i++) {
         if (strcmp(h->elems[i].name, "vertex") == 0)
             pl->vertex_elem = i;
         else if (strcmp(h->elems[i].name, "face") == 0)
             pl->face_elem = i;
+        else if (strcmp(h->elems[i].name, "tristrips") == 0)
+            pl->strip_elem = i;
     }
 
     /* Counts first: a count the file cannot hold is the most telling fault,
@@ -454,27 +493,12 @@ static sg_status plan_layout(const char *path, const ply_header *h, size_t file_
     }
 
     pl->face_count = 0;
-    if (pl->face_elem != SIZE_MAX) {
-        const ply_element *f = &h->elems[pl->face_elem];
-        for (size_t k = 0; k < f->prop_count; k++) {
-            const ply_prop *pr = &h->props[f->first_prop + k];
-            if (pr->count_type != T_NONE &&
-                (strcmp(pr->name, "vertex_indices") == 0 || strcmp(pr->name, "vertex_index") == 0)) {
-                pl->face_list = k;
-                break;
-            }
-        }
-        if (pl->face_list == SIZE_MAX && f->count > 0)
-            return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: header: face: no vertex_indices list property", path);
-        if (pl->face_list != SIZE_MAX) {
-            const ply_prop *pr = &h->props[f->first_prop + pl->face_list];
-            if (!type_is_integer(pr->type))
-                return sg_error_set(err, SG_ERR_CORRUPT, "%s: header: face: %s index type %s is not an integer type",
-                                    path, pr->name, TYPE_NAMES[pr->type].name);
-        }
-        pl->face_count = (size_t)f->count;
-    }
-    return SG_OK;
+    sg_status st = find_index_list(path, h, pl->face_elem, &pl->face_list, err);
+    if (st == SG_OK)
+        st = find_index_list(path, h, pl->strip_elem, &pl->strip_list, err);
+    if (st == SG_OK && pl->face_elem != SIZE_MAX)
+        pl->face_count = (size_t)h->elems[pl->face_elem].count;
+    return st;
 }
 
 /* ---- body values --------------------------------------------------------- */
@@ -722,14 +746,28 @@ static sg_status read_vertices(ply_reader *r, const ply_header *h, const ply_pla
     return SG_OK;
 }
 
+/* Reads past one property of record index of element elem (a value or a
+ * whole list). */
+static sg_status skip_property(ply_reader *r, const ply_prop *pr, const char *elem, size_t index)
+{
+    if (pr->count_type != T_NONE)
+        return skip_list(r, pr, elem, index);
+    double v;
+    read_result rd = read_value(r, pr->type, &v);
+    return rd == RD_OK ? SG_OK : read_fail(r, rd, elem, index, pr->name, pr->type);
+}
+
 static sg_status push_triangle(ply_reader *r, tri_buf *tb, uint32_t a, uint32_t b, uint32_t c)
 {
     if (tb->count == tb->cap) {
-        size_t cap;
-        if (!sg_mul_size(tb->cap, 2, &cap) || !sg_realloc_array((void **)&tb->idx, 3 * tb->count, 3 * cap,
-                                                                 sizeof(uint32_t)))
+        size_t cap = 1024;
+        void *grown = tb->idx;
+        if (tb->idx ? !sg_mul_size(tb->cap, 2, &cap) ||
+                          !sg_realloc_array(&grown, 3 * tb->count, 3 * cap, sizeof(uint32_t))
+                    : !(grown = sg_alloc_array(cap, 3 * sizeof(uint32_t))))
             return sg_error_set(r->err, SG_ERR_NOMEM, "%s: face: out of memory for %zu triangles", r->path,
                                 tb->count + 1);
+        tb->idx = grown;
         tb->cap = cap;
     }
     uint32_t *t = &tb->idx[3 * tb->count++];
@@ -748,14 +786,7 @@ static sg_status read_faces(ply_reader *r, const ply_header *h, const ply_plan *
             const ply_prop *pr = &props[k];
             sg_status st;
             if (k != pl->face_list) {
-                if (pr->count_type != T_NONE) {
-                    st = skip_list(r, pr, "face", i);
-                } else {
-                    double v;
-                    read_result rd = read_value(r, pr->type, &v);
-                    st = rd == RD_OK ? SG_OK : read_fail(r, rd, "face", i, pr->name, pr->type);
-                }
-                if (st != SG_OK)
+                if ((st = skip_property(r, pr, "face", i)) != SG_OK)
                     return st;
                 continue;
             }
@@ -782,6 +813,64 @@ static sg_status read_faces(ply_reader *r, const ply_header *h, const ply_plan *
                 else if (j >= 2 && (st = push_triangle(r, tb, first, prev, cur)) != SG_OK)
                     return st;
                 prev = cur;
+            }
+            if (n < 3) /* invariant 5 */
+                return sg_error_set(r->err, SG_ERR_CORRUPT, "%s: face %zu: %zu vertex ind%s; a face needs at least 3",
+                                    r->path, i, n, n == 1 ? "ex" : "ices");
+        }
+    }
+    return SG_OK;
+}
+
+/* Element tristrips (invariant 5). */
+static sg_status read_strips(ply_reader *r, const ply_header *h, const ply_plan *pl, tri_buf *tb)
+{
+    const ply_element *e = &h->elems[pl->strip_elem];
+    const ply_prop *props = &h->props[e->first_prop];
+    for (size_t i = 0; i < (size_t)e->count; i++) {
+        for (size_t k = 0; k < e->prop_count; k++) {
+            const ply_prop *pr = &props[k];
+            sg_status st;
+            if (k != pl->strip_list) {
+                if ((st = skip_property(r, pr, e->name, i)) != SG_OK)
+                    return st;
+                continue;
+            }
+            size_t n;
+            st = read_list_length(r, pr, e->name, i, &n);
+            if (st != SG_OK)
+                return st;
+            uint32_t v0 = 0, v1 = 0; /* the strip's last two vertices */
+            size_t in_strip = 0;     /* vertices of the current strip so far */
+            for (size_t j = 0; j < n; j++) {
+                double v;
+                read_result rd = read_value(r, pr->type, &v);
+                if (rd != RD_OK)
+                    return read_fail(r, rd, e->name, i, pr->name, pr->type);
+                /* -1 ends a strip; in an unsigned type it reads as the
+                 * type's largest value. */
+                if (v == -1.0 || (pr->type == T_U32 && v == 4294967295.0) ||
+                    (pr->type == T_U16 && v == 65535.0) || (pr->type == T_U8 && v == 255.0)) {
+                    in_strip = 0;
+                    continue;
+                }
+                if (v < 0)
+                    return sg_error_set(r->err, SG_ERR_CORRUPT,
+                                        "%s: %s %zu: negative vertex index %.0f (only -1 may end a strip)", r->path,
+                                        e->name, i, v);
+                if (v >= (double)pl->vertex_count)
+                    return sg_error_set(r->err, SG_ERR_CORRUPT, "%s: %s %zu: vertex index %.0f out of range (%zu vertices)",
+                                        r->path, e->name, i, v, pl->vertex_count);
+                uint32_t cur = (uint32_t)v; /* invariant 4 */
+                if (in_strip >= 2 && v0 != v1 && v1 != cur && v0 != cur) {
+                    /* triangle k = in_strip - 2: odd k swaps its first two */
+                    st = (in_strip - 2) % 2 ? push_triangle(r, tb, v1, v0, cur) : push_triangle(r, tb, v0, v1, cur);
+                    if (st != SG_OK)
+                        return st;
+                }
+                v0 = v1;
+                v1 = cur;
+                in_strip++;
             }
         }
     }
@@ -811,15 +900,7 @@ static sg_status skip_element(ply_reader *r, const ply_header *h, const ply_elem
     }
     for (size_t i = 0; i < (size_t)e->count; i++) {
         for (size_t k = 0; k < e->prop_count; k++) {
-            const ply_prop *pr = &props[k];
-            sg_status st;
-            if (pr->count_type != T_NONE) {
-                st = skip_list(r, pr, e->name, i);
-            } else {
-                double v;
-                read_result rd = read_value(r, pr->type, &v);
-                st = rd == RD_OK ? SG_OK : read_fail(r, rd, e->name, i, pr->name, pr->type);
-            }
+            sg_status st = skip_property(r, &props[k], e->name, i);
             if (st != SG_OK)
                 return st;
         }
@@ -889,6 +970,8 @@ sg_status sg_ply_read(const char *path, sg_mesh *out, sg_error *err)
             st = read_vertices(&r, h, pl, &m);
         else if (i == pl->face_elem && pl->face_list != SIZE_MAX)
             st = read_faces(&r, h, pl, &tb);
+        else if (i == pl->strip_elem && pl->strip_list != SIZE_MAX)
+            st = read_strips(&r, h, pl, &tb);
         else
             st = skip_element(&r, h, &h->elems[i]);
         if (st != SG_OK)
@@ -914,5 +997,42 @@ fail:
     sg_free(pl);
     sg_free(h);
     sg_free(buf);
+    return st;
+}
+
+/* ---- header only ------------------------------------------------------- */
+
+/* Headers are a few hundred bytes; 1 MiB holds any real one. */
+#define HEADER_PEEK_BYTES (1u << 20)
+
+sg_status sg_ply_read_counts(const char *path, uint64_t *vertices, uint64_t *faces, sg_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return sg_error_set(err, SG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    char *buf = sg_alloc_array(HEADER_PEEK_BYTES + 1, 1);
+    ply_header *h = sg_calloc_array(1, sizeof *h);
+    sg_status st = SG_OK;
+    if (!buf || !h) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for the header", path);
+        goto done;
+    }
+    size_t n = fread(buf, 1, HEADER_PEEK_BYTES, f);
+    buf[n] = '\0';
+    if ((st = parse_header(path, buf, n, h, err)) != SG_OK)
+        goto done;
+    uint64_t v = 0, t = 0;
+    for (size_t i = 0; i < h->elem_count; i++) {
+        if (strcmp(h->elems[i].name, "vertex") == 0)
+            v = h->elems[i].count;
+        else if (strcmp(h->elems[i].name, "face") == 0 || strcmp(h->elems[i].name, "tristrips") == 0)
+            t += h->elems[i].count;
+    }
+    *vertices = v;
+    *faces = t;
+done:
+    sg_free(h);
+    sg_free(buf);
+    fclose(f);
     return st;
 }

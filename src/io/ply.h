@@ -13,7 +13,13 @@
  *   element face     property list <count type> <index type> vertex_indices
  *                    (or vertex_index). Any integer count and index types.
  *                    A polygon v0 v1 ... vn-1 becomes the fan (v0,vi,vi+1);
- *                    faces with fewer than 3 indices are dropped.
+ *                    a face with fewer than 3 indices is an error.
+ *   element tristrips  property list <count type> <index type> vertex_indices:
+ *                    triangle strips, -1 ending each; strip triangle k is
+ *                    (v_k, v_k+1, v_k+2) with the first two swapped for odd
+ *                    k (OpenGL's rule: the winding is kept); triangles with
+ *                    a repeated vertex (stitching) are dropped. Faces and
+ *                    strips may come together; triangles are in file order.
  *   Every other element and property, scalar or list, is skipped. Header
  *   `comment` and `obj_info` lines are ignored; CRLF header lines are fine.
  *
@@ -47,6 +53,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "io/mesh.h"
@@ -54,6 +61,11 @@
 /* Reads the PLY file at path into *out (arrays from sg_alloc_array; release
  * with sg_mesh_free). */
 sg_status sg_ply_read(const char *path, sg_mesh *out, sg_error *err);
+
+/* The vertex count and the face + tristrips record count its header
+ * declares, reading the header alone (the first MiB at most): what a
+ * memory estimate needs before loading. Errors as sg_ply_read's header. */
+sg_status sg_ply_read_counts(const char *path, uint64_t *vertices, uint64_t *faces, sg_error *err);
 
 /* Helpers shared by the model loaders (ply.c, obj.c; defined in mesh.c).
  * Not meant for use outside src/io. */

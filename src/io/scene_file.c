@@ -67,16 +67,22 @@ static sg_status fail(const ctx *c, const char *jp, const char *fmt, ...)
     return sg_error_set(c->err, SG_ERR_CORRUPT, "%s: %s: %s", c->name, jp, what);
 }
 
-/* Copies s for a message: printable ASCII kept, the rest as '?', at most
- * max bytes then "...". */
+/* Copies s for a message: printable ASCII kept, the rest as '?'. A string
+ * longer than max bytes keeps its first half and its end around "...": the
+ * end is where a path's extension (often the fault) is. */
 static void sanitize(const char *s, char *out, size_t out_size, size_t max)
 {
-    size_t j = 0, i = 0;
-    for (; s[i] && j + 4 < out_size && i < max; ++i)
+    size_t n = strlen(s), j = 0;
+    if (max + 1 > out_size)
+        max = out_size - 1;
+    size_t head = n <= max ? n : max / 2, from = n <= max ? n : n - (max - max / 2 - 3);
+    for (size_t i = 0; i < head; ++i)
         out[j++] = (s[i] >= 32 && s[i] < 127) ? s[i] : '?';
-    if (s[i] && j + 4 < out_size) {
+    if (from < n) {
         memcpy(out + j, "...", 3);
         j += 3;
+        for (size_t i = from; i < n; ++i)
+            out[j++] = (s[i] >= 32 && s[i] < 127) ? s[i] : '?';
     }
     out[j] = '\0';
 }
@@ -352,15 +358,22 @@ static int has_suffix_ci(const char *s, const char *suffix)
     return 1;
 }
 
-/* Member key must be a non-empty string ending in ext1 or ext2; *out gets
- * it joined to the base folder when relative. */
-static sg_status get_path(const ctx *c, const cJSON *v, const char *jp, const char *ext1, const char *ext2,
-                          char **out)
+/* Member key must be a non-empty string ending in one of exts (NULL
+ * terminated); *out gets it joined to the base folder when relative. */
+static sg_status get_path(const ctx *c, const cJSON *v, const char *jp, const char *const *exts, char **out)
 {
-    char e[64];
-    snprintf(e, sizeof e, "a %s or %s file path", ext1, ext2);
-    if (!cJSON_IsString(v) || !v->valuestring[0] ||
-        !(has_suffix_ci(v->valuestring, ext1) || has_suffix_ci(v->valuestring, ext2)))
+    char e[96] = "a ";
+    size_t used = 2, n = 0;
+    int ok = 0;
+    while (exts[n])
+        ++n;
+    for (size_t i = 0; i < n; ++i) {
+        used += (size_t)snprintf(e + used, sizeof e - used, "%s%s", i == 0 ? "" : i + 1 == n ? " or " : ", ",
+                                 exts[i]);
+        ok |= cJSON_IsString(v) && has_suffix_ci(v->valuestring, exts[i]);
+    }
+    snprintf(e + used, sizeof e - used, " file path");
+    if (!cJSON_IsString(v) || !v->valuestring[0] || !ok)
         return fail_got(c, jp, e, v);
     const char *rel = v->valuestring;
     size_t nr = strlen(rel);
@@ -388,9 +401,15 @@ static sg_status get_path(const ctx *c, const cJSON *v, const char *jp, const ch
 
 static sg_status parse_transform(const ctx *c, const cJSON *obj, const char *jp, sg_scene_transform *t)
 {
-    static const char *const keys[] = {"translate", "rotate_deg", "scale"};
+    static const char *const keys[] = {"up", "translate", "rotate_deg", "scale"};
     static const range SCALE = {0.0, 1e6, 1, 0};
     sg_status st = check_object(c, obj, jp, keys, COUNT(keys));
+    const cJSON *up = member(obj, "up");
+    if (st == SG_OK && up && (!cJSON_IsString(up) || sg_scene_up_parse(up->valuestring, &t->up) != SG_OK)) {
+        char cp[JP_MAX];
+        child_path(cp, jp, "up");
+        st = fail_got(c, cp, "one of \"+y\", \"-y\", \"+z\", \"-z\", \"+x\", \"-x\" (the sign may be left out)", up);
+    }
     if (st == SG_OK)
         st = get_vec3(c, obj, jp, "translate", ANY, &t->translate);
     if (st == SG_OK)
@@ -471,17 +490,20 @@ static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, s
 
 static sg_status parse_model(const ctx *c, const cJSON *obj, const char *jp, sg_scene_model *m)
 {
-    static const char *const keys[] = {"path", "builtin", "points", "radius_k", "radius_scale",
-                                       "transform", "material", "surface"};
+    static const char *const keys[] = {"path", "builtin", "points", "radius_k", "radius_scale", "radius_cap",
+                                       "drop_outliers", "transform", "material", "surface"};
     static const char *const builtins[] = {"bunny", "ground", "sphere"};
     static const int builtin_values[] = {SG_SCENE_MODEL_BUNNY, SG_SCENE_MODEL_GROUND, SG_SCENE_MODEL_SPHERE};
     static const range RADIUS_SCALE = {0.0, 100.0, 1, 0};
+    static const range RADIUS_CAP = {0.0, 1e6, 0, 0};
 
     /* Defaults (invariant 3). */
     m->kind = SG_SCENE_MODEL_FILE;
     m->path = NULL;
-    m->points = (sg_model_points_desc){.points = 0, .radius_k = 8, .radius_scale = 1.0f, .seed = 0};
-    m->transform = (sg_scene_transform){{0, 0, 0}, {0, 0, 0}, {1, 1, 1}};
+    m->points = (sg_model_points_desc){.points = 0, .radius_k = 8, .radius_scale = 1.0f, .seed = 0,
+                                       .radius_cap = SG_RADIUS_CAP_DEFAULT, .drop_outliers = false};
+    float cap = SG_RADIUS_CAP_DEFAULT;
+    m->transform = (sg_scene_transform){.up = SG_SCENE_UP_POS_Y, .scale = {1, 1, 1}};
     m->material = sg_material_default();
     m->surface = (sg_scene_desc){.model = SG_SURFACE_MLS, .kernel = SG_KERNEL_HAT, .samples_per_cell = 8};
 
@@ -494,9 +516,10 @@ static sg_status parse_model(const ctx *c, const cJSON *obj, const char *jp, sg_
     if (!path && !builtin)
         return fail(c, jp, "missing required key \"path\" or \"builtin\"");
     char cp[JP_MAX];
+    static const char *const model_exts[] = {".ply", ".obj", ".xyz", ".txt", ".pcd", NULL};
     if (path) {
         child_path(cp, jp, "path");
-        st = get_path(c, path, cp, ".ply", ".obj", &m->path);
+        st = get_path(c, path, cp, model_exts, &m->path);
     } else {
         int kind = 0;
         st = get_enum(c, obj, jp, "builtin", builtins, builtin_values, COUNT(builtins), &kind);
@@ -511,6 +534,15 @@ static sg_status parse_model(const ctx *c, const cJSON *obj, const char *jp, sg_
     m->points.radius_k = (unsigned)k;
     if (st == SG_OK)
         st = get_float(c, obj, jp, "radius_scale", RADIUS_SCALE, &m->points.radius_scale);
+    if (st == SG_OK)
+        st = get_float(c, obj, jp, "radius_cap", RADIUS_CAP, &cap);
+    if (st == SG_OK && cap > 0.0f && cap < 1.0f) {
+        child_path(cp, jp, "radius_cap");
+        st = fail_got(c, cp, "0 (no cap) or a number in [1,1000000]", member(obj, "radius_cap"));
+    }
+    m->points.radius_cap = cap == 0.0f ? -1.0f : cap; /* the desc's "no cap" */
+    if (st == SG_OK)
+        st = get_bool(c, obj, jp, "drop_outliers", &m->points.drop_outliers);
     const cJSON *sub;
     if (st == SG_OK && (sub = member(obj, "transform"))) {
         child_path(cp, jp, "transform");
@@ -542,7 +574,8 @@ static sg_status parse_env(const ctx *c, const cJSON *obj, const char *jp, sg_sc
         return fail(c, jp, "give either \"path\" or \"builtin\", not both");
     if (path) {
         child_path(cp, jp, "path");
-        st = get_path(c, path, cp, ".exr", ".hdr", &e->path);
+        static const char *const env_exts[] = {".exr", ".hdr", NULL};
+        st = get_path(c, path, cp, env_exts, &e->path);
         e->kind = SG_SCENE_ENV_FILE;
     } else {
         int kind = (int)e->kind;
@@ -915,7 +948,8 @@ static void h_str(uint64_t *h, const char *s)
 uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
 {
     uint64_t h = FNV_OFFSET;
-    h_u64(&h, 1); /* serialisation version: bump when the encoding changes */
+    h_u64(&h, 2); /* serialisation version: bump when the encoding changes (2: up axis, radius cap,
+                     outlier drop) */
     h_u64(&h, parts & SG_SCENE_HASH_ALL);
     if (parts & SG_SCENE_HASH_MODELS) {
         h_u64(&h, sf->model_count);
@@ -927,6 +961,9 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
             h_u64(&h, m->points.radius_k);
             h_f32(&h, m->points.radius_scale);
             h_u64(&h, m->points.seed);
+            h_f32(&h, m->points.radius_cap);
+            h_u64(&h, m->points.drop_outliers);
+            h_u64(&h, (uint64_t)m->transform.up);
             h_v3(&h, m->transform.translate);
             h_v3(&h, m->transform.rotate_deg);
             h_v3(&h, m->transform.scale);
@@ -988,13 +1025,65 @@ static sg_vec3 rotate_xyz(sg_vec3 deg, sg_vec3 v)
     return sg_v3((float)x3, (float)y3, (float)z2);
 }
 
+/* ---- up axis ------------------------------------------------------------ */
+
+static const struct {
+    const char *name; /* canonical spelling */
+    sg_scene_up up;
+} UP_NAMES[] = {{"+y", SG_SCENE_UP_POS_Y}, {"-y", SG_SCENE_UP_NEG_Y}, {"+z", SG_SCENE_UP_POS_Z},
+                {"-z", SG_SCENE_UP_NEG_Z}, {"+x", SG_SCENE_UP_POS_X}, {"-x", SG_SCENE_UP_NEG_X}};
+
+sg_status sg_scene_up_parse(const char *s, sg_scene_up *out)
+{
+    if (!s)
+        return SG_ERR_INVALID_ARG;
+    char sign = '+', axis;
+    if (s[0] == '+' || s[0] == '-')
+        sign = *s++;
+    axis = (char)tolower((unsigned char)s[0]);
+    if (!axis || s[1])
+        return SG_ERR_INVALID_ARG;
+    for (size_t i = 0; i < COUNT(UP_NAMES); ++i)
+        if (UP_NAMES[i].name[0] == sign && UP_NAMES[i].name[1] == axis) {
+            *out = UP_NAMES[i].up;
+            return SG_OK;
+        }
+    return SG_ERR_INVALID_ARG;
+}
+
+const char *sg_scene_up_name(sg_scene_up up)
+{
+    for (size_t i = 0; i < COUNT(UP_NAMES); ++i)
+        if (UP_NAMES[i].up == up)
+            return UP_NAMES[i].name;
+    return "?";
+}
+
+/* The quarter or half turn that takes the model's up axis to +Y (a proper
+ * rotation, so handedness and winding are kept): +Z up turns -90 degrees
+ * about X, +X up +90 about Z, -Y up 180 about X. */
+sg_vec3 sg_scene_up_apply(sg_scene_up up, sg_vec3 v)
+{
+    switch (up) {
+    case SG_SCENE_UP_POS_Z: return sg_v3(v.x, v.z, -v.y);
+    case SG_SCENE_UP_NEG_Z: return sg_v3(v.x, -v.z, v.y);
+    case SG_SCENE_UP_POS_X: return sg_v3(-v.y, v.x, v.z);
+    case SG_SCENE_UP_NEG_X: return sg_v3(v.y, -v.x, v.z);
+    case SG_SCENE_UP_NEG_Y: return sg_v3(v.x, -v.y, -v.z);
+    case SG_SCENE_UP_POS_Y: break;
+    }
+    return v;
+}
+
 sg_vec3 sg_scene_transform_point(const sg_scene_transform *t, sg_vec3 p)
 {
+    p = sg_scene_up_apply(t->up, p);
     return sg_v3_add(t->translate, rotate_xyz(t->rotate_deg, sg_v3_mul(t->scale, p)));
 }
 
 sg_vec3 sg_scene_transform_normal(const sg_scene_transform *t, sg_vec3 n)
 {
+    n = sg_scene_up_apply(t->up, n);
     sg_vec3 s = sg_v3(n.x / t->scale.x, n.y / t->scale.y, n.z / t->scale.z);
     return sg_v3_normalize(rotate_xyz(t->rotate_deg, s));
 }

@@ -17,7 +17,8 @@
  *   {
  *     "models": [ REQUIRED, at least one                  -> sg_scene_model
  *       {
- *         "path": "bunny.ply",   .ply or .obj; relative paths resolve against
+ *         "path": "bunny.ply",   .ply, .obj, .xyz, .txt or .pcd (io/mesh.h);
+ *                                relative paths resolve against
  *                                the scene file's folder     (exactly one of
  *         "builtin": "bunny",    "bunny" | "ground" | "sphere" path, builtin)
  *         "points": 250000,      mesh samples, integer [1, 1e9]; absent = 0 =
@@ -26,12 +27,20 @@
  *                                points)) per side (2..20000; default 300)
  *         "radius_k": 8,         splat radius from the k-th neighbour [1, 64]
  *         "radius_scale": 1.0,   radius multiplier (0, 100]
+ *         "radius_cap": 8,       estimated radii are capped at this many times
+ *                                the median (stray points); 0 = no cap, else
+ *                                [1, 1e6] (points/radius.h)
+ *         "drop_outliers": false,  drop the points whose radius was capped
  *         "transform": {
+ *           "up": "+y",          the model's up axis, turned to +Y first:
+ *                                "+y" "-y" "+z" "-z" "+x" "-x" (sign
+ *                                optional; "z" for Z-up scans)
  *           "translate": [0,0,0],
  *           "rotate_deg": [0,0,0],  XYZ Euler: about X, then Y, then Z
  *                                   (world axes; Blender's "XYZ" mode)
  *           "scale": 1           number or [sx,sy,sz], each in (0, 1e6]
- *         },                     p' = translate + Rz Ry Rx (scale * p)
+ *         },                     p' = translate + Rz Ry Rx (scale * U p),
+ *                                U the up-axis turn
  *         "material": {          see material/bsdf.h
  *           "type": "lambert",   "lambert" | "ggx"
  *           "albedo": [1,1,1],   each in [0,1]
@@ -120,10 +129,21 @@ typedef enum sg_scene_env_kind {
     SG_SCENE_ENV_STUDIO = 4
 } sg_scene_env_kind;
 
+/* A model's up axis (scanners and photogrammetry often write Z-up). */
+typedef enum sg_scene_up {
+    SG_SCENE_UP_POS_Y = 0, /* default: already Y-up */
+    SG_SCENE_UP_NEG_Y = 1,
+    SG_SCENE_UP_POS_Z = 2,
+    SG_SCENE_UP_NEG_Z = 3,
+    SG_SCENE_UP_POS_X = 4,
+    SG_SCENE_UP_NEG_X = 5
+} sg_scene_up;
+
 typedef struct sg_scene_transform {
     sg_vec3 translate;   /* world units; default 0                       */
     sg_vec3 rotate_deg;  /* XYZ Euler angles, degrees; default 0         */
     sg_vec3 scale;       /* per-axis factors > 0; default 1              */
+    sg_scene_up up;      /* turned to +Y before the rest; default +Y     */
 } sg_scene_transform;
 
 typedef struct sg_scene_model {
@@ -131,8 +151,10 @@ typedef struct sg_scene_model {
     char *path;                  /* resolved path for SG_SCENE_MODEL_FILE,
                                     NULL for builtins                       */
     sg_model_points_desc points; /* points (0 = loader default), radius_k
-                                    (default 8), radius_scale (default 1);
-                                    seed 0                                 */
+                                    (default 8), radius_scale (default 1),
+                                    radius_cap (SG_RADIUS_CAP_DEFAULT; -1
+                                    for the file's 0 = no cap),
+                                    drop_outliers; seed 0                  */
     sg_scene_transform transform;
     sg_material material;        /* defaults: sg_material_default()        */
     sg_scene_desc surface;       /* model, kernel, kd_disable and
@@ -183,6 +205,14 @@ sg_status sg_scene_file_parse(const char *text, size_t len, const char *name, co
 /* Frees everything and zeroes *sf; NULL and zeroed structs are fine. */
 void sg_scene_file_free(sg_scene_file *sf);
 
+/* Writes sf as a scene file that loads back to the same scene (equal
+ * sg_scene_file_hash over every part), every key spelt out so a user sees
+ * what can be edited; model and envmap paths made absolute (realpath) so
+ * the file may live anywhere. Written to a temporary name and renamed
+ * (core/file_mode.h permissions). SG_ERR_IO names path; SG_ERR_NOMEM.
+ * (scene_file_write.c) */
+sg_status sg_scene_file_write(const sg_scene_file *sf, const char *path, sg_error *err);
+
 /* The camera called name, or NULL. */
 const sg_scene_camera *sg_scene_file_find_camera(const sg_scene_file *sf, const char *name);
 
@@ -204,10 +234,20 @@ enum sg_scene_hash_parts {
  * files' contents: mix in a content hash where files may change. */
 uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts);
 
-/* Transform helpers (semantics as in the schema). point: translate + R S p.
- * normal: R S^-1 n, normalised (the inverse transpose of R S). radius: r
- * times the largest scale factor, so disks still cover the surface under a
- * non-uniform scale. */
+/* "+z", "z", "-X", ... -> *out (SG_OK), else SG_ERR_INVALID_ARG with *out
+ * untouched (the caller names the option in its message). */
+sg_status sg_scene_up_parse(const char *s, sg_scene_up *out);
+
+/* Canonical name: "+y", "-z", ... */
+const char *sg_scene_up_name(sg_scene_up up);
+
+/* U v: the rotation that takes axis `up` to +Y (a quarter or half turn). */
+sg_vec3 sg_scene_up_apply(sg_scene_up up, sg_vec3 v);
+
+/* Transform helpers (semantics as in the schema). point: translate + R S U p.
+ * normal: R S^-1 U n, normalised (the inverse transpose of R S U). radius:
+ * r times the largest scale factor, so disks still cover the surface under
+ * a non-uniform scale (U keeps lengths). */
 sg_vec3 sg_scene_transform_point(const sg_scene_transform *t, sg_vec3 p);
 sg_vec3 sg_scene_transform_normal(const sg_scene_transform *t, sg_vec3 n);
 float sg_scene_transform_radius(const sg_scene_transform *t, float r);

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/alloc.h"
 #include "points/normals.h"
 #include "points/radius.h"
 #include "points/sample.h"
@@ -27,6 +28,62 @@ static sg_model_points_desc model_defaults(const sg_model_points_desc *d)
     return r;
 }
 
+/* Keeps the points with keep[i] == 0 (the capped mask marks the others). */
+static sg_status drop_marked(sg_pointset *ps, const unsigned char *mark, size_t marked, sg_error *err)
+{
+    sg_pointset kept = {0};
+    sg_status st = sg_pointset_alloc(&kept, ps->count - marked, err);
+    if (st != SG_OK)
+        return st;
+    size_t j = 0;
+    for (size_t i = 0; i < ps->count; i++) {
+        if (mark[i])
+            continue;
+        kept.px[j] = ps->px[i]; kept.py[j] = ps->py[i]; kept.pz[j] = ps->pz[i];
+        kept.nx[j] = ps->nx[i]; kept.ny[j] = ps->ny[i]; kept.nz[j] = ps->nz[i];
+        kept.ar[j] = ps->ar[i]; kept.ag[j] = ps->ag[i]; kept.ab[j] = ps->ab[i];
+        kept.radius[j] = ps->radius[i];
+        j++;
+    }
+    sg_pointset_free(ps);
+    *ps = kept;
+    return SG_OK;
+}
+
+/* Radii from the k-th neighbour with the cap; with drop_outliers the
+ * capped points go and the rest are estimated again (their neighbours may
+ * have included a dropped point). */
+static sg_status estimate_radii(sg_pointset *ps, const sg_model_points_desc *d, sg_model_points_report *rep,
+                                sg_error *err)
+{
+    sg_radius_stats rs;
+    unsigned char *mark = NULL;
+    if (d->drop_outliers && !(mark = sg_alloc_array(ps->count, 1)))
+        return sg_error_set(err, SG_ERR_NOMEM, "out of memory for %zu outlier marks", ps->count);
+    sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale, .cap = d->radius_cap, .stats = &rs,
+                         .capped = mark};
+    sg_status st = sg_points_estimate_radii(ps, &rd, err);
+    if (st == SG_OK && mark && rs.capped > 0) {
+        if (rs.capped > ps->count - 2) {
+            st = sg_error_set(err, SG_ERR_INVALID_ARG, "dropping %zu outliers would leave %zu points", rs.capped,
+                              ps->count - rs.capped);
+        } else {
+            rep->dropped = rs.capped;
+            st = drop_marked(ps, mark, rs.capped, err);
+            rd.capped = NULL;
+            if (st == SG_OK)
+                st = sg_points_estimate_radii(ps, &rd, err);
+        }
+    }
+    sg_free(mark);
+    if (st == SG_OK) {
+        rep->capped = rs.capped;
+        rep->median_radius = rs.median;
+        rep->cap_radius = rs.cap_radius;
+    }
+    return st;
+}
+
 sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const sg_model_points_desc *dd,
                                     sg_pointset *out, sg_error *err)
 {
@@ -37,8 +94,9 @@ sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const
     if (!(d->radius_scale > 0.0f) || !isfinite(d->radius_scale))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: radius scale %g must be > 0", path,
                             (double)d->radius_scale);
+    size_t turned = 0, repeated = 0;
     if (mesh->triangle_count > 0) {
-        sg_sample_desc sd = {.count = d->points, .seed = d->seed};
+        sg_sample_desc sd = {.count = d->points, .seed = d->seed, .faces_turned = &turned, .faces_repeated = &repeated};
         st = sg_points_sample_mesh(mesh, &sd, &ps, err);
     } else {
         st = sg_points_from_vertices(mesh, &ps, err);
@@ -58,26 +116,27 @@ sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const
                 goto fail;
         }
     }
+    sg_model_points_report rep = {.file_vertices = mesh->vertex_count, .file_triangles = mesh->triangle_count,
+                                  .has_colors = mesh->colors != NULL, .faces_repeated = repeated,
+                                  .faces_turned = turned};
     if (mesh->triangle_count == 0 && mesh->radii) {
         for (size_t i = 0; i < ps.count; i++)
             ps.radius[i] *= d->radius_scale;
-    } else {
-        sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale};
-        st = sg_points_estimate_radii(&ps, &rd, err);
-        if (st != SG_OK)
-            goto fail;
+    } else if ((st = estimate_radii(&ps, d, &rep, err)) != SG_OK) {
+        goto fail;
     }
     if (!mesh->colors) {
-        for (size_t i = 0; i < ps.count; i++) {
-            ps.ar[i] = SG_DEFAULT_ALBEDO_R;
-            ps.ag[i] = SG_DEFAULT_ALBEDO_G;
-            ps.ab[i] = SG_DEFAULT_ALBEDO_B;
-        }
+        /* No colours in the file: no tint, the material's albedo is the
+         * albedo (model_points.h). */
+        for (size_t i = 0; i < ps.count; i++)
+            ps.ar[i] = ps.ag[i] = ps.ab[i] = 1.0f;
     }
     st = sg_pointset_validate(&ps, err);
     if (st != SG_OK)
         goto fail;
     *out = ps;
+    if (d->report)
+        *d->report = rep;
     return SG_OK;
 
 fail:

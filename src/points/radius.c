@@ -15,6 +15,9 @@
  * Duplicate clusters (k-th distance 0) are grouped by exact position and
  * resolved with one larger query per cluster, so a cluster of m points
  * costs O(m log N) once, not m times.
+ *  4. no radius exceeds cap x the median radius (radius.h, stray points);
+ *     the median is the exact middle order statistic (the lower of the two
+ *     middle values for an even count), found by quickselect on a copy.
  */
 #include "points/radius.h"
 
@@ -52,6 +55,37 @@ static int same_position(const dup_point *a, const dup_point *b)
     return a->p[0] == b->p[0] && a->p[1] == b->p[1] && a->p[2] == b->p[2];
 }
 
+/* The k-th smallest of v[0..n) (0-based), reordering v: quickselect with
+ * a three-way partition, so runs of equal radii (grids) cannot make it
+ * quadratic. The values are finite (checked before). */
+static float select_kth(float *v, size_t n, size_t k)
+{
+    size_t lo = 0, hi = n; /* the answer lies in v[lo, hi) */
+    while (hi - lo > 1) {
+        float pivot = v[lo + (hi - lo) / 2];
+        size_t lt = lo, i = lo, gt = hi;
+        while (i < gt) {
+            float x = v[i];
+            if (x < pivot) {
+                v[i++] = v[lt];
+                v[lt++] = x;
+            } else if (x > pivot) {
+                v[i] = v[--gt];
+                v[gt] = x;
+            } else {
+                ++i;
+            }
+        }
+        if (k < lt)
+            hi = lt;
+        else if (k >= gt)
+            lo = gt;
+        else
+            return pivot;
+    }
+    return v[k];
+}
+
 sg_status sg_points_estimate_radii(sg_pointset *ps, const sg_radius_desc *d, sg_error *err)
 {
     if (!ps)
@@ -74,6 +108,9 @@ sg_status sg_points_estimate_radii(sg_pointset *ps, const sg_radius_desc *d, sg_
                             sg_knn_count(desc.knn), n);
     if (k > n - 1)
         k = n - 1;
+    float cap = desc.cap == 0.0f ? SG_RADIUS_CAP_DEFAULT : desc.cap;
+    if (!(cap < 0.0f) && !(cap >= 1.0f && isfinite(cap)))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "radii: cap %g is not >= 1 (or < 0 for none)", (double)cap);
 
     sg_status st = SG_OK;
     sg_knn *own = NULL;      /* tree built here when none is shared       */
@@ -81,6 +118,7 @@ sg_status sg_points_estimate_radii(sg_pointset *ps, const sg_radius_desc *d, sg_
     dup_point *dups = NULL;  /* points whose k-th distance is 0, sorted   */
     uint32_t *qidx = NULL;   /* query scratch for one duplicate cluster   */
     float *qd2 = NULL;
+    float *sorted = NULL;    /* copy of the radii for the median          */
     const sg_knn *tree = desc.knn;
     if (!tree) {
         sg_knn_desc kd = {.count = n, .px = ps->px, .py = ps->py, .pz = ps->pz};
@@ -160,9 +198,32 @@ sg_status sg_points_estimate_radii(sg_pointset *ps, const sg_radius_desc *d, sg_
         }
         d2k[i] = r;
     }
+    /* Invariant 4: the cap. */
+    sg_radius_stats rs = {.cap_radius = INFINITY};
+    sorted = sg_alloc_array(n, sizeof(float));
+    if (!sorted) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "radii: cannot allocate %zu radii for the median", n);
+        goto done;
+    }
+    memcpy(sorted, d2k, n * sizeof(float));
+    rs.median = select_kth(sorted, n, (n - 1) / 2);
+    if (cap > 0.0f)
+        rs.cap_radius = cap * rs.median;
+    for (size_t i = 0; i < n; ++i) {
+        int over = d2k[i] > rs.cap_radius;
+        if (over) {
+            d2k[i] = rs.cap_radius;
+            ++rs.capped;
+        }
+        if (desc.capped)
+            desc.capped[i] = (unsigned char)over;
+    }
     memcpy(ps->radius, d2k, n * sizeof(float));
+    if (desc.stats)
+        *desc.stats = rs;
 
 done:
+    sg_free(sorted);
     sg_free(qd2);
     sg_free(qidx);
     sg_free(dups);

@@ -13,6 +13,15 @@
  * 1e-3 * the bounding-box diagonal of the set.
  * Fewer than k+1 points: k is lowered to count-1.
  *
+ * Stray points: a point far from the rest (a raw, unaligned range scan,
+ * a flying pixel at a depth edge) has a k-th neighbour distance of its
+ * distance to the surface and would get a splat covering the frame. Every
+ * radius is therefore capped at cap x the median radius of the set (cap
+ * SG_RADIUS_CAP_DEFAULT = 8 unless the desc says otherwise): evenly sampled
+ * surfaces vary by less than 2x, scans by a few times with the distance to
+ * the scanner, stray points by 100x and more. stats says how many were
+ * capped; capped[] (optional) marks them, for callers that drop them.
+ *
  * Use:
  *     sg_radius_desc d = {0};                       zero = k 8, scale 1
  *     if (sg_points_estimate_radii(&ps, &d, &err) != SG_OK) ...
@@ -30,11 +39,24 @@
 #include "points/knn.h"
 #include "points/pointset.h"
 
+#define SG_RADIUS_CAP_DEFAULT 8.0f /* radii capped at 8 x the median */
+
+/* What the cap did. */
+typedef struct sg_radius_stats {
+    size_t capped;     /* radii lowered to the cap                        */
+    float median;      /* median radius before the cap                    */
+    float cap_radius;  /* the cap: cap x median (INFINITY without a cap)  */
+} sg_radius_stats;
+
 typedef struct sg_radius_desc {
     unsigned k;        /* neighbour rank; 0 = 8                               */
     float scale;       /* multiplier of the k-th distance; 0 = 1.0            */
     const sg_knn *knn; /* optional, shared for the call: a tree built over
                           exactly this pointset's positions; NULL = build one */
+    float cap;         /* radii above cap x the median are capped; 0 =
+                          SG_RADIUS_CAP_DEFAULT, < 0 no cap, else >= 1       */
+    sg_radius_stats *stats;  /* optional out: filled on SG_OK                */
+    unsigned char *capped;   /* optional out: count bytes, 1 where capped    */
 } sg_radius_desc;
 
 /* d may be NULL (all defaults). An empty pointset is a no-op. */

@@ -22,12 +22,23 @@
  *   u_i = (i + xi_i) / count through the CDF, so a triangle holding the
  *   fraction f of the area receives count*f points within +-2. Within its
  *   triangle the point has barycentrics (1-sqrt(a), sqrt(a)(1-b), sqrt(a) b)
- *   (the square-root warp, uniform in area). xi_i, a, b are
+ *   (the square-root warp, uniform in area), and lies on the triangle's
+ *   Phong tessellation (Boubekeur & Alexa 2008, shape factor 3/4: pulled
+ *   towards the planes of its vertex normals, so that the splats'
+ *   normals match the surface they sit on; a flat triangle stays flat).
+ *   xi_i, a, b are
  *   sg_rng_float/bits keyed by (seed, i, 0, dim) with dim 0, 1, 2.
  *   normal = the barycentric interpolation of the vertex normals (file
  *            normals, where a file normal is missing the area-weighted one),
  *            normalised — smooth shading normals; the face normal where
- *            the interpolation vanishes;
+ *            the interpolation vanishes. A triangle with the same vertices
+ *            as an earlier one is left out (faces_repeated counts them;
+ *            crude decimations repeat faces, some wound the other way).
+ *            Face normals take a consistent
+ *            orientation first: faces sharing an edge are made to agree,
+ *            each connected piece faces outward when closed, else keeps
+ *            the winding most of its faces have (faces_turned counts the
+ *            triangles turned);
  *   albedo = interpolated vertex colours, else 0.8 grey;
  *   radius = radius_scale * sqrt(8 * A / (pi * count)), A the total area:
  *            the mean distance to the 8th nearest neighbour of a uniform
@@ -57,6 +68,10 @@ typedef struct sg_sample_desc {
     size_t count;       /* required: number of points to sample (>= 1)       */
     uint64_t seed;      /* random stream; every value is valid; default 0    */
     float radius_scale; /* multiplier of the analytic radius; 0 = 1.0        */
+    size_t *faces_turned; /* optional out (on SG_OK): triangles whose winding
+                             was turned to agree with their neighbours      */
+    size_t *faces_repeated; /* optional out (on SG_OK): triangles with the
+                               vertices of an earlier one, left out         */
 } sg_sample_desc;
 
 sg_status sg_points_from_vertices(const sg_mesh *m, sg_pointset *out, sg_error *err);

@@ -62,6 +62,13 @@ sg_status sg_default_scene_load(const sg_default_scene_desc *d, sg_default_scene
     st = sg_model_points_from_mesh(&mesh, path, &md, &bunny, err);
     if (st != SG_OK)
         goto done;
+    /* The default scene's own look: a light clay bunny (the file has no
+     * colours, and model points without colours are white). */
+    for (size_t i = 0; i < bunny.count; i++) {
+        bunny.ar[i] = 0.78f;
+        bunny.ag[i] = 0.62f;
+        bunny.ab[i] = 0.50f;
+    }
     sg_aabb box = sg_pointset_bounds(&bunny);
     sg_vec3 centre = sg_v3(0.5f * (box.lo.x + box.hi.x), ground_y, 0.5f * (box.lo.z + box.hi.z));
     sg_plane_points_desc pd = {.side = dd.ground_side, .half = dd.ground_half, .centre = centre,

@@ -2,7 +2,8 @@
  *
  * The default scene is the Stanford bunny (assets/bunny.ply, made by
  * scripts/setup.sh from the npm package bunny@1.0.1: 1839 vertices, 3674
- * triangles, Y-up, about 10 units tall) sampled to splats, standing on a
+ * triangles, Y-up, about 10 units tall) sampled to splats in a light clay
+ * colour (0.78, 0.62, 0.50), standing on a
  * square ground plane of splats; with it come a default camera (a 3/4 view
  * of the bunny from slightly above) and a light direction (upper left,
  * in front). It is what `splatgi-render --default` and the benchmarks draw.

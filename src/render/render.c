@@ -55,11 +55,12 @@ static sg_vec3 sky(const frame *f, sg_vec3 dir)
     return sg_v3_add(sg_v3_scale(horizon, 1.0f - t), sg_v3_scale(f->d.sky_color, t));
 }
 
-static sg_vec3 shade_pixel(const frame *f, const sg_ray *ray, tile_stats *ts)
+static sg_vec3 shade_pixel(const frame *f, const sg_ray *ray, tile_stats *ts, int *covered)
 {
     sg_hit hit;
     ts->primary_rays++;
     int found = sg_scene_intersect(f->scene, ray, &hit, &ts->primary);
+    *covered = found;
     switch (f->d.shade) {
     case SG_SHADE_NORMALS:
         if (!found)
@@ -107,7 +108,9 @@ static void render_tile(const frame *f, int tile, int tiles_x, sg_image *img, ti
         for (int x = x0; x < x1; x++) {
             sg_ray ray = sg_camera_ray(&f->d.camera, (float)x + 0.5f, (float)y + 0.5f, img->width,
                                        img->height);
-            sg_vec3 c = shade_pixel(f, &ray, ts);
+            int covered;
+            sg_vec3 c = shade_pixel(f, &ray, ts, &covered);
+            img->alpha[(size_t)y * (size_t)img->width + (size_t)x] = (float)covered;
             float *px = img->data + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
             px[0] = c.x;
             px[1] = c.y;
@@ -179,6 +182,11 @@ sg_status sg_render_frame(const sg_scene *scene, const sg_render_desc *desc, sg_
     st = sg_image_alloc(&img, f.d.width, f.d.height, err);
     if (st != SG_OK)
         return st;
+    /* Coverage (which camera ray hit), the alpha of EXR outputs. */
+    if (!(img.alpha = sg_alloc_array((size_t)f.d.width * (size_t)f.d.height, sizeof(float)))) {
+        sg_image_free(&img);
+        return sg_error_set(err, SG_ERR_NOMEM, "render: out of memory for %dx%d", f.d.width, f.d.height);
+    }
     int tiles_x = (img.width + TILE - 1) / TILE, tiles_y = (img.height + TILE - 1) / TILE;
     int tiles = tiles_x * tiles_y; /* <= 4096^2: fits an int */
     tile_stats *ts = sg_calloc_array((size_t)tiles, sizeof *ts);

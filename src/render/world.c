@@ -10,6 +10,7 @@
 #include "render/world.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -27,17 +28,20 @@ struct sg_world {
     sg_aabb *model_bounds;   /* each model's support box, for culling    */
 };
 
-static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_pointset *out, sg_error *err)
+static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_pointset *out,
+                                   sg_model_points_report *report, sg_error *err)
 {
     sg_status st;
+    sg_model_points_desc md = m->points;
+    md.report = report;
     switch (m->kind) {
     case SG_SCENE_MODEL_FILE:
-        st = sg_model_points_load(m->path, &m->points, out, err);
+        st = sg_model_points_load(m->path, &md, out, err);
         break;
     case SG_SCENE_MODEL_BUNNY: {
         char path[4096];
         snprintf(path, sizeof path, "%s/bunny.ply", SG_ASSET_DIR);
-        st = sg_model_points_load(path, &m->points, out, err);
+        st = sg_model_points_load(path, &md, out, err);
         break;
     }
     case SG_SCENE_MODEL_GROUND: {
@@ -49,13 +53,13 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
             side = r < 2.0 ? 2 : r > 20000.0 ? 20000 : (int)r;
         }
         sg_plane_points_desc d = {.side = side, .radius_k = m->points.radius_k,
-                                  .radius_scale = m->points.radius_scale};
+                                  .radius_scale = m->points.radius_scale, .albedo = {1, 1, 1}};
         st = sg_points_make_plane(&d, out, err);
         break;
     }
     case SG_SCENE_MODEL_SPHERE: {
         sg_sphere_points_desc d = {.count = m->points.points, .radius_k = m->points.radius_k,
-                                   .radius_scale = m->points.radius_scale};
+                                   .radius_scale = m->points.radius_scale, .albedo = {1, 1, 1}};
         st = sg_points_make_sphere(&d, out, err);
         break;
     }
@@ -104,7 +108,71 @@ static sg_status make_envmap(const sg_scene_env *e, sg_envmap **out, sg_error *e
     return st;
 }
 
+/* ---- progress and notes (sg_world_desc) --------------------------------- */
+
+static void say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static void say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ...)
+{
+    if (!d || !d->on_event)
+        return;
+    char msg[SG_ERROR_MESSAGE_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    d->on_event(d->user, kind, msg);
+}
+
+/* "scan.ply" for a file model, "builtin bunny" otherwise. */
+static const char *model_label(const sg_scene_model *m)
+{
+    static const char *const builtin[] = {"", "builtin bunny", "builtin ground", "builtin sphere"};
+    if (m->kind == SG_SCENE_MODEL_FILE && m->path) {
+        const char *slash = strrchr(m->path, '/');
+        return slash ? slash + 1 : m->path;
+    }
+    return (size_t)m->kind < sizeof builtin / sizeof builtin[0] ? builtin[m->kind] : "builtin model";
+}
+
+static void note_points(const sg_world_desc *d, size_t i, const sg_scene_model *m, const sg_model_points_report *r,
+                        size_t splats)
+{
+    if (r->faces_repeated || r->faces_turned)
+        say(d, SG_WORLD_NOTE,
+            "$.models[%zu] (%s): of %zu triangles, %zu repeat an earlier one (left out) and %zu were wound against "
+            "their neighbours (turned)", i, model_label(m), r->file_triangles, r->faces_repeated, r->faces_turned);
+    if (r->dropped)
+        say(d, SG_WORLD_NOTE,
+            "$.models[%zu] (%s): dropped %zu stray points whose radius was over %g x the median spacing",
+            i, model_label(m), r->dropped, (double)m->points.radius_cap);
+    if (r->capped)
+        say(d, SG_WORLD_NOTE,
+            "$.models[%zu] (%s): %zu of %zu splat radii were over %g x the median (%.4g) and were capped to %.4g "
+            "(stray points; \"drop_outliers\": true removes them)",
+            i, model_label(m), r->capped, splats,
+            (double)(m->points.radius_cap > 0.0f ? m->points.radius_cap : SG_RADIUS_CAP_DEFAULT),
+            (double)r->median_radius, (double)r->cap_radius);
+}
+
+static void note_envmap(const sg_world_desc *d, const sg_scene_env *e, const sg_envmap *env)
+{
+    sg_envmap_info info;
+    sg_envmap_get_info(env, &info);
+    if (info.nonfinite_texels)
+        say(d, SG_WORLD_NOTE, "%s: %zu of %d x %d texels held NaN or infinite values and were set to 0",
+            e->path ? e->path : "envmap", info.nonfinite_texels, info.width, info.height);
+}
+
 sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err)
+{
+    return sg_world_create_desc(sf, NULL, out, err);
+}
+
+sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, sg_world **out, sg_error *err)
 {
     if (!sf || !out || sf->model_count == 0)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "world: no models");
@@ -124,9 +192,14 @@ sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err
     for (size_t i = 0; i < sf->model_count; ++i) {
         const sg_scene_model *m = &sf->models[i];
         sg_pointset ps = {0};
-        if ((st = load_model_points(m, i, &ps, err)) != SG_OK)
+        sg_model_points_report rep = {0};
+        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): making splats", i + 1, sf->model_count, model_label(m));
+        if ((st = load_model_points(m, i, &ps, &rep, err)) != SG_OK)
             goto fail;
+        note_points(d, i, m, &rep, ps.count);
         transform_points(&m->transform, &ps);
+        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1,
+            sf->model_count, model_label(m), m->surface.model == SG_SURFACE_DISK ? "disk" : "MLS", ps.count);
         st = sg_scene_create(&m->surface, &ps, &w->scenes[i], err);
         sg_pointset_free(&ps);
         if (st != SG_OK)
@@ -137,8 +210,10 @@ sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err
         w->bounds = sg_aabb_union(w->bounds, info.bounds);
         w->model_bounds[i] = info.bounds;
     }
+    say(d, SG_WORLD_STAGE, "environment map%s%s", sf->env.path ? " " : "", sf->env.path ? sf->env.path : "");
     if ((st = make_envmap(&sf->env, &w->env, err)) != SG_OK)
         goto fail;
+    note_envmap(d, &sf->env, w->env);
     *out = w;
     return SG_OK;
 fail:

@@ -11,7 +11,8 @@
  * Builtin models: "bunny" (assets/bunny.ply sampled like any mesh: about
  * 10 units tall, standing on y = 0), "ground" (a 30 x 30 square of splats at
  * y = 0, normal +Y), "sphere" (unit sphere, outward normals, 100k points or
- * the model's "points"); each then goes through its transform.
+ * the model's "points"); each then goes through its transform. None of
+ * them has colours (white splats): the material's albedo is theirs.
  *
  * Ownership: the world copies what it needs; the scene file may be freed
  * after sg_world_create. Queries are thread-safe; stats must be per thread.
@@ -38,6 +39,24 @@ typedef struct sg_world_hit {
 /* Loads every model (building its kd-tree) and the envmap. On failure
  * *out is untouched and err names the model ("$.models[1]: ...") or file. */
 sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err);
+
+/* What sg_world_create_desc tells its caller while it builds. */
+typedef enum sg_world_event {
+    SG_WORLD_STAGE = 0, /* a stage begins: "model 1 of 2 (scan.ply): reading" */
+    SG_WORLD_NOTE = 1   /* the input was changed or is suspect, with counts:
+                           capped radii, dropped outliers, zeroed envmap
+                           texels; once per model or map                    */
+} sg_world_event;
+
+typedef struct sg_world_desc {
+    /* Optional; called on the calling thread between stages (never from a
+     * parallel region), message valid during the call only. */
+    void (*on_event)(void *user, sg_world_event kind, const char *message);
+    void *user;
+} sg_world_desc;
+
+/* sg_world_create with progress and notes (d may be NULL: none). */
+sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, sg_world **out, sg_error *err);
 
 /* NULL is a no-op. */
 void sg_world_destroy(sg_world *w);

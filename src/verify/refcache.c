@@ -18,6 +18,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "core/alloc.h"
+#include "render/coverage.h"
 #include "math/rng.h"
 #include "verify/verify_int.h"
 
@@ -129,7 +131,17 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
         return st;
     if (d.cache_dir && sg_verify__make_dirs(d.cache_dir)) {
         sg_error werr;
-        if (sg_image_write_exr(&r.mean, exr, &werr) == SG_OK && sg_image_write_exr(&r.std_error, se, &werr) == SG_OK) {
+        /* Coverage as alpha, as every EXR the project writes (the centre
+         * rays: the paths all go through the centres). */
+        float *alpha = NULL;
+        sg_coverage_desc cd = {.camera = d.camera, .width = d.width, .height = d.height};
+        int written = sg_coverage_render(w, &cd, &alpha, &werr) == SG_OK;
+        r.mean.alpha = r.std_error.alpha = alpha; /* shared for the writes only */
+        written = written && sg_image_write_exr(&r.mean, exr, &werr) == SG_OK &&
+                  sg_image_write_exr(&r.std_error, se, &werr) == SG_OK;
+        r.mean.alpha = r.std_error.alpha = NULL;
+        sg_free(alpha);
+        if (written) {
             char tmp[4200];
             snprintf(tmp, sizeof tmp, "%s.tmp%ld", txt, (long)getpid());
             FILE *f = fopen(tmp, "w");

@@ -27,8 +27,13 @@
 #include "render/camera.h"
 #include "render/world.h"
 
-/* Bump when the path tracer's estimator changes. */
-#define SG_VERIFY_REF_VERSION 2u
+/* Version of the reference algorithm, part of every cache key: bump when
+ * the same scene starts rendering differently, so old entries are not
+ * reused. 2: bilinear envmap lookup with max-weight sampling (envmap.h);
+ * files without colours give white points (no clay tint); 3: Russian
+ * roulette only below throughput 1 (pathtrace.h), mesh samples on the
+ * Phong-tessellated surface. */
+#define SG_VERIFY_REF_VERSION 3u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

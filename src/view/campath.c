@@ -11,9 +11,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "core/alloc.h"
+#include "core/file_mode.h"
 
 #define CAMPATH__NUMBERS 11
 
@@ -112,7 +114,8 @@ sg_status sg_campath_write(const sg_campath *p, const char *path, sg_error *err)
         st = sg_error_set(err, SG_ERR_IO, "%s: write failed: %s", path, strerror(errno));
         goto done_remove;
     }
-    if (rename(tmp, path) != 0) {
+    /* mkstemp made it 0600: the mode every output gets (core/file_mode.h). */
+    if (chmod(tmp, sg_output_file_mode(path)) != 0 || rename(tmp, path) != 0) {
         st = sg_error_set(err, SG_ERR_IO, "%s: rename failed: %s", path, strerror(errno));
         goto done_remove;
     }

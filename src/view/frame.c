@@ -14,9 +14,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "core/alloc.h"
+#include "core/file_mode.h"
 #include "view/render.h"
 
 static void frame__forget(sg_view_frame *f)
@@ -183,7 +185,8 @@ sg_status sg_view_write_png_rgba8(const uint8_t *rgba, int width, int height, co
         st = sg_error_set(err, SG_ERR_IO, "%s: write failed: %s", path, strerror(errno));
         goto done_remove;
     }
-    if (rename(tmp, path) != 0) {
+    /* mkstemp made it 0600: the mode every output gets (core/file_mode.h). */
+    if (chmod(tmp, sg_output_file_mode(path)) != 0 || rename(tmp, path) != 0) {
         st = sg_error_set(err, SG_ERR_IO, "%s: rename failed: %s", path, strerror(errno));
         goto done_remove;
     }

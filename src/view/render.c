@@ -9,6 +9,8 @@
 
 #include <omp.h>
 
+#include "core/alloc.h"
+
 /* Tiles are the unit of work per thread (dynamic schedule), as in
  * sg_bake_render; quads are traced within them. */
 enum { TILE = 16 };
@@ -28,6 +30,12 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
     sg_status st = sg_image_alloc(&img, d.width, d.height, err);
     if (st != SG_OK)
         return st;
+    /* Coverage for the EXR outputs (screenshots, headless frames): which
+     * camera ray hit, as sg_coverage_render with one ray a pixel. */
+    if (!(img.alpha = sg_alloc_array((size_t)d.width * (size_t)d.height, sizeof(float)))) {
+        sg_image_free(&img);
+        return sg_error_set(err, SG_ERR_NOMEM, "sg_view_render: out of memory for %dx%d", d.width, d.height);
+    }
     const sg_envmap *env = sg_world_envmap(w);
     int tiles_x = (d.width + TILE - 1) / TILE, tiles = tiles_x * ((d.height + TILE - 1) / TILE);
     int threads = d.threads > 0 ? d.threads : omp_get_max_threads();
@@ -53,7 +61,9 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
                     int q = __builtin_ctz(m);
                     sg_vec3 L = hit >> q & 1u ? sg_bake_lookup(b, w, &h[q], sg_v3_scale(rays[q].dir, -1.0f))
                                               : sg_envmap_eval(env, rays[q].dir);
-                    float *px = img.data + 3 * ((size_t)(y + (q >> 1)) * (size_t)d.width + (size_t)(x + (q & 1)));
+                    size_t at = (size_t)(y + (q >> 1)) * (size_t)d.width + (size_t)(x + (q & 1));
+                    float *px = img.data + 3 * at;
+                    img.alpha[at] = (float)(hit >> q & 1u);
                     px[0] = L.x;
                     px[1] = L.y;
                     px[2] = L.z;

@@ -518,7 +518,7 @@ static void test_display_bad_args(void **state)
     sg_display *d = open_view("Standard", 0.0f);
     sg_error err;
     uint8_t px[16];
-    sg_image empty = {0, 0, NULL};
+    sg_image empty = {0, 0, NULL, NULL};
     assert_int_equal(sg_display_apply(d, &empty, px, &err), SG_ERR_INVALID_ARG);
     const float v[1] = {0.5f};
     sg_image one = grey_row(v, 1);

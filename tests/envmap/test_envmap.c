@@ -6,14 +6,19 @@
  * 2. Warp trio: invert(sample(u)) = u, sample(invert(d)) = d; the pdf
  *    returned by sample equals sg_envmap_pdf bit for bit; pdf integrates to
  *    1 (exactly per texel, and on an unaligned grid within a derived bound).
- * 3. Chi-square of sampled directions against lum x solid angle computed
- *    here from the image, on half-texel cells (so the in-texel distribution
- *    is tested too); alpha = 0.01, Sidak-corrected over the maps; cells
- *    pooled to >= 5 expected; fixed seed; black texels never drawn.
+ * 3. Chi-square of sampled directions against weight x solid angle, the
+ *    weights (the largest bilinear luminance in each texel) computed here
+ *    from the image, on half-texel cells (so the in-texel distribution is
+ *    tested too); alpha = 0.01, Sidak-corrected over the maps; cells pooled
+ *    to >= 5 expected; fixed seed; black texels never drawn.
  * 4. Estimators: power by importance sampling and by uniform sampling vs
- *    sum over pixels x solid angle, within 4 sigma / sqrt(N); the studio
+ *    the integral of the bilinear lookup (Gauss-Legendre here), within
+ *    4 sigma / sqrt(N); L / pdf bounded by the sampling power; the studio
  *    map's pixel sum vs its closed form; tiny-sun irradiance variance under
  *    importance sampling vs uniform sampling (bound derived below).
+ * 6. Bilinear lookup: against a reference written here from the formula of
+ *    envmap.h, continuous across the u seam and near the poles; no
+ *    direction with eval > 0 and pdf 0 on sparse maps.
  * 5. Texels: negative / NaN / Inf values counted and zeroed; intensity;
  *    the all-black map falls back to uniform sampling; bad arguments; the
  *    real maps load by path (.exr and .hdr) and count their negatives.
@@ -74,6 +79,101 @@ static double texel_omega(int j, int W, int H)
 }
 
 static float u01(uint64_t item, uint32_t dim) { return sg_rng_float(SEED, item, 0, dim); }
+
+/* Texel (i, j) of img with envmap.h's wrap in u and clamp in v. */
+static const float *texel_wc(const sg_image *img, int i, int j)
+{
+    const int W = img->width, H = img->height;
+    i = ((i % W) + W) % W;
+    j = j < 0 ? 0 : j >= H ? H - 1 : j;
+    return img->data + 3 * ((size_t)j * W + i);
+}
+
+/* The bilinear lookup of envmap.h at (u, v), in double, from the image. */
+static void bilinear_ref(const sg_image *img, double u, double v, double out[3])
+{
+    double x = u * img->width - 0.5, y = v * img->height - 0.5;
+    double fx = floor(x), s = x - fx;
+    int i = (int)fx;
+    int j0, j1;
+    double t;
+    if (y <= 0.0) {
+        j0 = j1 = 0, t = 0.0;
+    } else if (y >= img->height - 1) {
+        j0 = j1 = img->height - 1, t = 0.0;
+    } else {
+        j0 = (int)floor(y), j1 = j0 + 1, t = y - j0;
+    }
+    for (int c = 0; c < 3; c++) {
+        double a = texel_wc(img, i, j0)[c], b = texel_wc(img, i + 1, j0)[c];
+        double cc = texel_wc(img, i, j1)[c], d = texel_wc(img, i + 1, j1)[c];
+        out[c] = (1 - t) * ((1 - s) * a + s * b) + t * ((1 - s) * cc + s * d);
+    }
+}
+
+/* A texel's sampling weight (envmap.h): the largest luminance of the
+ * bilinear lookup inside it, found among its centre, 4 edge midpoints and
+ * 4 corners (averages of itself and its neighbours, wrap/clamp). */
+static double weight_ref(const sg_image *img, int i, int j)
+{
+    double w = 0.0;
+    for (int dj = -1; dj <= 1; dj++)
+        for (int di = -1; di <= 1; di++) {
+            /* the point half a texel towards (di, dj): average of the texels
+             * spanning it */
+            double sum = 0.0;
+            int n = 0;
+            for (int a = 0; a <= (di != 0); a++)
+                for (int b = 0; b <= (dj != 0); b++) {
+                    sum += lum_of(texel_wc(img, i + a * di, j + b * dj));
+                    n++;
+                }
+            w = fmax(w, sum / n);
+        }
+    return w;
+}
+
+/* Sum of weight x solid angle: the sampling power P_w of envmap.h. */
+static double sampling_power_ref(const sg_image *img)
+{
+    double p = 0.0;
+    for (int j = 0; j < img->height; j++)
+        for (int i = 0; i < img->width; i++)
+            p += weight_ref(img, i, j) * texel_omega(j, img->width, img->height);
+    return p;
+}
+
+/* Integral of the bilinear lookup over the sphere, per channel: in u a
+ * row's linear interpolation integrates to its mean (periodic); in v the
+ * lookup is piecewise linear between row centres (flat beyond the first
+ * and last), integrated against 2 pi . pi sin(pi v) by 8-point
+ * Gauss-Legendre on each piece (error far below float rounding). */
+static void bilinear_power_ref(const sg_image *img, double out[3])
+{
+    static const double gx[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
+                                 -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
+                                 0.7966664774136267,  0.9602898564975363};
+    static const double gw[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
+                                 0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+    const int W = img->width, H = img->height;
+    out[0] = out[1] = out[2] = 0.0;
+    for (int k = -1; k < H; k++) { /* piece between centres k and k + 1 (caps at -1 and H - 1) */
+        double a = k < 0 ? 0.0 : (k + 0.5) / H, b = k + 1 >= H ? 1.0 : (k + 1.5) / H;
+        int ja = k < 0 ? 0 : k, jb = k + 1 >= H ? H - 1 : k + 1;
+        double ma[3] = {0, 0, 0}, mb[3] = {0, 0, 0};
+        for (int i = 0; i < W; i++)
+            for (int c = 0; c < 3; c++) {
+                ma[c] += img->data[3 * ((size_t)ja * W + i) + c] / W;
+                mb[c] += img->data[3 * ((size_t)jb * W + i) + c] / W;
+            }
+        for (int g = 0; g < 8; g++) {
+            double v = 0.5 * (a + b) + 0.5 * (b - a) * gx[g], t = (v - a) / (b - a);
+            double wv = gw[g] * 0.5 * (b - a) * 2.0 * PI * PI * sin(PI * v);
+            for (int c = 0; c < 3; c++)
+                out[c] += ((1 - t) * ma[c] + t * mb[c]) * wv;
+        }
+    }
+}
 
 /* A uniformly distributed unit direction. */
 static sg_vec3 uniform_dir(uint64_t item)
@@ -151,8 +251,13 @@ static void test_envmap_mapping_axes_and_roundtrip(void **state)
     sg_image_free(&img);
 }
 
-/* eval of the rotated map at R_y(a) d is the unrotated texel seen at d. */
-static void test_envmap_eval_nearest_and_rotation(void **state)
+/* eval of the rotated map at R_y(a) d is the bilinear lookup of the
+ * unrotated image at d: at texel centres the texel, inside texels the
+ * blend of the 4 nearest centres (a nearest-texel lookup, which made maps
+ * behind a model blocky, is 12 to 36 units off here). Tolerance: float
+ * directions carry ~1e-7 rad, ~1e-6 texel, times the largest step between
+ * neighbouring texels (72): 1e-4; 1e-5 of the values covers it. */
+static void test_envmap_eval_bilinear_and_rotation(void **state)
 {
     (void)state;
     const int W = 24, H = 12;
@@ -161,24 +266,65 @@ static void test_envmap_eval_nearest_and_rotation(void **state)
     for (int t = 0; t < W * H; t++)
         for (int c = 0; c < 3; c++)
             img.data[3 * t + c] = (float)(t * 3 + c + 1);
+    const double tol = 1e-5 * 3 * W * H;
     const float angles[] = {0.0f, 90.0f, 200.0f, -17.0f};
     for (size_t a = 0; a < sizeof angles / sizeof angles[0]; a++) {
         sg_envmap *m = make_map(&img, angles[a], 2.0f);
         for (int j = 0; j < H; j++)
             for (int i = 0; i < W; i++)
-                /* Several points inside texel (i, j), not only its centre. */
-                for (int s = 0; s < 4; s++) {
-                    float fu = 0.1f + 0.8f * (s & 1), fv = 0.1f + 0.8f * (s >> 1);
-                    sg_vec3 d = sg_envmap_uv_to_dir(NULL, (i + fu) / W, (j + fv) / H);
+                /* The centre and several points inside texel (i, j). */
+                for (int s = 0; s < 5; s++) {
+                    float fu = s == 4 ? 0.5f : 0.1f + 0.8f * (s & 1), fv = s == 4 ? 0.5f : 0.1f + 0.8f * (s >> 1);
+                    double u = (i + fu) / (double)W, v = (j + fv) / (double)H;
+                    sg_vec3 d = sg_envmap_uv_to_dir(NULL, (float)u, (float)v);
                     sg_vec3 L = sg_envmap_eval(m, rot_y(d, angles[a]));
-                    const float *p = img.data + 3 * (j * W + i);
-                    if (L.x != 2 * p[0] || L.y != 2 * p[1] || L.z != 2 * p[2])
+                    double want[3];
+                    bilinear_ref(&img, u, v, want);
+                    if (fabs(L.x - 2 * want[0]) > tol || fabs(L.y - 2 * want[1]) > tol ||
+                        fabs(L.z - 2 * want[2]) > tol)
                         fail_msg("rot %g: texel (%d, %d) point %d: eval (%g, %g, %g), want 2 x (%g, %g, %g)",
-                                 (double)angles[a], i, j, s, (double)L.x, (double)L.y, (double)L.z,
-                                 (double)p[0], (double)p[1], (double)p[2]);
+                                 (double)angles[a], i, j, s, (double)L.x, (double)L.y, (double)L.z, want[0], want[1],
+                                 want[2]);
+                    if (s == 4) {
+                        sg_vec3 T = sg_envmap_texel(m, i, j);
+                        const float *p = img.data + 3 * (j * W + i);
+                        assert_true(T.x == 2 * p[0] && T.y == 2 * p[1] && T.z == 2 * p[2]);
+                    }
                 }
         sg_envmap_destroy(m);
     }
+    sg_image_free(&img);
+}
+
+/* The lookup is continuous: across the u seam (u = 0 is u = 1) and around
+ * the poles (flat above the first row of centres), steps of 1e-4 change it
+ * by no more than the gradient allows; a nearest lookup jumps a whole
+ * texel step there. */
+static void test_envmap_eval_continuous(void **state)
+{
+    (void)state;
+    const int W = 16, H = 8;
+    sg_image img = {0};
+    assert_int_equal(sg_image_alloc(&img, W, H, NULL), SG_OK);
+    for (int t = 0; t < W * H; t++)
+        for (int c = 0; c < 3; c++)
+            img.data[3 * t + c] = (float)((t * 7919) % 101) + 1.0f;
+    sg_envmap *m = make_map(&img, 0.0f, 0);
+    /* Largest change per unit of u or v: 100 (value range) per texel. */
+    const double h = 1e-4, lip = 100.0 * (W > H ? W : H), tol = 2.0 * lip * h + 1e-3;
+    for (int k = 0; k < 400; k++) {
+        double v = (k + 0.5) / 400.0;
+        sg_vec3 a = sg_envmap_eval(m, sg_envmap_uv_to_dir(NULL, (float)(1.0 - h), (float)v));
+        sg_vec3 b = sg_envmap_eval(m, sg_envmap_uv_to_dir(NULL, (float)h, (float)v));
+        if (fabs(a.x - b.x) > tol)
+            fail_msg("seam at v %g: %g left, %g right (tolerance %g)", v, (double)a.x, (double)b.x, tol);
+        double u = (k + 0.5) / 400.0;
+        sg_vec3 c = sg_envmap_eval(m, sg_envmap_uv_to_dir(NULL, (float)u, (float)(u * 0.999)));
+        sg_vec3 d = sg_envmap_eval(m, sg_envmap_uv_to_dir(NULL, (float)(u + h), (float)(u * 0.999)));
+        if (fabs(c.y - d.y) > tol)
+            fail_msg("u %g: step of %g in u changed the lookup from %g to %g", u, h, (double)c.y, (double)d.y);
+    }
+    sg_envmap_destroy(m);
     sg_image_free(&img);
 }
 
@@ -396,13 +542,10 @@ static void test_envmap_chi_square(void **state)
         size_t cells = (size_t)4 * W * H;
         double *obs = calloc(cells, sizeof(double)), *expct = calloc(cells, sizeof(double));
         assert_true(obs && expct);
-        double P = 0.0;
-        for (int j = 0; j < H; j++)
-            for (int i = 0; i < W; i++)
-                P += lum_of(maps[k].img.data + 3 * (j * W + i)) * texel_omega(j, W, H);
+        double P = sampling_power_ref(&maps[k].img);
         for (int j = 0; j < H; j++)
             for (int i = 0; i < W; i++) {
-                double p = lum_of(maps[k].img.data + 3 * (j * W + i)) * texel_omega(j, W, H) / P;
+                double p = weight_ref(&maps[k].img, i, j) * texel_omega(j, W, H) / P;
                 for (int s = 0; s < 4; s++)
                     expct[4 * ((size_t)j * W + i) + s] = N * p / 4.0;
             }
@@ -437,7 +580,9 @@ static void test_envmap_chi_square(void **state)
     free_test_maps(maps);
 }
 
-/* Half the texels black (a checker): none may ever be drawn. */
+/* Half the texels black (a checker): no sample may land where the lookup
+ * is black (the black texels are lit towards their lit neighbours, and
+ * drawn there). */
 static void test_envmap_black_texels_never_sampled(void **state)
 {
     (void)state;
@@ -458,6 +603,62 @@ static void test_envmap_black_texels_never_sampled(void **state)
                      (double)d.x, (double)d.y, (double)d.z, (double)pdf);
     }
     sg_envmap_destroy(m);
+    sg_image_free(&img);
+}
+
+/* No direction with eval > 0 and pdf 0: on sparse maps (single lit texels
+ * in the top row, at the u seam, mid-map, two touching at a corner) every
+ * direction where the bilinear lookup is lit has pdf > 0, and L / pdf stays
+ * within the sampling power. Weighting texels by their own luminance, as a
+ * nearest lookup allows, leaves the lit rim around each texel with pdf 0:
+ * an estimator that never samples where light is, biased low. Directions:
+ * a dense grid around each lit texel plus uniform ones. */
+static void test_envmap_lit_lookup_has_positive_pdf(void **state)
+{
+    (void)state;
+    const int W = 32, H = 16;
+    static const int lit[][2] = {{5, 0}, {0, 7}, {31, 9}, {17, 11}, {18, 12}, {9, 15}};
+    sg_image img = {0};
+    assert_int_equal(sg_image_alloc(&img, W, H, NULL), SG_OK);
+    for (size_t k = 0; k < sizeof lit / sizeof lit[0]; k++)
+        img.data[3 * ((size_t)lit[k][1] * W + lit[k][0]) + k % 3] = 10.0f + (float)k;
+    for (int rot = 0; rot < 2; rot++) {
+        float angle = rot ? 33.0f : 0.0f;
+        sg_envmap *m = make_map(&img, angle, 0);
+        sg_envmap_info info;
+        sg_envmap_get_info(m, &info);
+        size_t lit_dirs = 0;
+        for (size_t k = 0; k < sizeof lit / sizeof lit[0] + 1; k++) {
+            int n = k < sizeof lit / sizeof lit[0] ? 121 : 20000;
+            for (int q = 0; q < n; q++) {
+                sg_vec3 d;
+                if (k < sizeof lit / sizeof lit[0]) { /* 11 x 11 points over the 3 x 3 texels around it */
+                    double u = (lit[k][0] - 1 + 3.0 * ((q % 11) + 0.5) / 11.0) / W;
+                    double v = (lit[k][1] - 1 + 3.0 * ((q / 11) + 0.5) / 11.0) / H;
+                    u -= floor(u);
+                    v = fmin(fmax(v, 1e-4), 1.0 - 1e-4);
+                    d = rot_y(sg_envmap_uv_to_dir(NULL, (float)u, (float)v), angle);
+                } else {
+                    d = uniform_dir((uint64_t)q + 777);
+                }
+                sg_vec3 L = sg_envmap_eval(m, d);
+                float pdf = sg_envmap_pdf(m, d);
+                double lum = 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z;
+                if (!(lum > 0.0))
+                    continue;
+                lit_dirs++;
+                if (!(pdf > 0.0f))
+                    fail_msg("rot %g: d (%g, %g, %g) near lit texel %zu: eval (%g, %g, %g) > 0 but pdf 0",
+                             (double)angle, (double)d.x, (double)d.y, (double)d.z, k, (double)L.x, (double)L.y,
+                             (double)L.z);
+                if (!(lum / pdf <= info.sampling_power * (1.0 + 1e-5)))
+                    fail_msg("rot %g: lum(L) / pdf = %g above the sampling power %g", (double)angle, lum / pdf,
+                             (double)info.sampling_power);
+            }
+        }
+        assert_true(lit_dirs > 300); /* the grids did reach lit directions */
+        sg_envmap_destroy(m);
+    }
     sg_image_free(&img);
 }
 
@@ -495,11 +696,14 @@ static void pixel_power(const sg_image *img, double out[3])
  *   E[X] = integral of L_c(d) / pdf(d) pdf(d) dd = integral of L_c = power_c,
  * because pdf > 0 wherever L != 0. By the central limit theorem the sample
  * mean lies within 4 sigma / sqrt(N) of it except with probability 6e-5;
- * sigma is the sample standard deviation of X. For the luminance channel
- * X = P exactly (pdf = lum / P), sigma ~ 0, and only float rounding of each
- * X (relative 2^-24 per operation, a handful of operations) remains: the
- * slack 1e-5 |mean| covers it without hiding a real bias (a wrong texel
- * solid angle errs by > 1e-3 at these resolutions).
+ * sigma is the sample standard deviation of X; 1e-5 |mean| more covers the
+ * float rounding of each X. The reference is the integral of the bilinear
+ * lookup (bilinear_power_ref), which sg_envmap_power must equal within
+ * float rounding.
+ * The luminance estimator is bounded: pdf = w / P_w with w the largest
+ * luminance of the lookup in the texel, so 0 <= lum(L) / pdf <= P_w for
+ * every sample (no fireflies from the lookup rising inside a texel); P_w
+ * (info.sampling_power) is checked against sampling_power_ref.
  * The uniform estimator X = 4 pi L_c(d), d uniform, has the same mean. */
 static void test_envmap_power_estimators(void **state)
 {
@@ -510,10 +714,16 @@ static void test_envmap_power_estimators(void **state)
     for (int k = 0; k < 3; k++) {
         const sg_envmap *m = maps[k].m;
         double ref[3];
-        pixel_power(&maps[k].img, ref);
+        bilinear_power_ref(&maps[k].img, ref);
         sg_vec3 api = sg_envmap_power(m);
         const float apic[3] = {api.x, api.y, api.z};
+        sg_envmap_info info;
+        sg_envmap_get_info(m, &info);
+        double pw = sampling_power_ref(&maps[k].img);
+        if (fabs(info.sampling_power - pw) > 1e-5 * pw)
+            fail_msg("%s: sampling power %.9g, computed here %.9g", maps[k].name, (double)info.sampling_power, pw);
         stats is[4] = {{0}}, uni[3] = {{0}};
+        double lum_max = 0.0;
         for (uint64_t n = 0; n < N; n++) {
             float pdf;
             sg_vec3 d = sg_envmap_sample(m, u01(n, 8), u01(n, 9), &pdf);
@@ -521,7 +731,9 @@ static void test_envmap_power_estimators(void **state)
             add(&is[0], L.x / pdf);
             add(&is[1], L.y / pdf);
             add(&is[2], L.z / pdf);
-            add(&is[3], (0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z) / pdf);
+            double xl = (0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z) / pdf;
+            add(&is[3], xl);
+            lum_max = fmax(lum_max, xl);
             sg_vec3 w = uniform_dir(n);
             sg_vec3 Lu = sg_envmap_eval(m, w);
             add(&uni[0], 4 * PI * Lu.x);
@@ -530,25 +742,28 @@ static void test_envmap_power_estimators(void **state)
         }
         for (int c = 0; c < 3; c++) {
             if (fabs(apic[c] - ref[c]) > 1e-5 * ref[c])
-                fail_msg("%s: sg_envmap_power channel %d = %.9g, pixel sum %.9g", maps[k].name, c, (double)apic[c],
-                         ref[c]);
+                fail_msg("%s: sg_envmap_power channel %d = %.9g, integral of the lookup %.9g", maps[k].name, c,
+                         (double)apic[c], ref[c]);
             double tol = 4 * sigma_of(&is[c]) / sqrt((double)N) + 1e-5 * fabs(mean_of(&is[c]));
             if (fabs(mean_of(&is[c]) - ref[c]) > tol)
-                fail_msg("%s: importance-sampled power channel %d = %.9g, pixel sum %.9g, tolerance %.3g",
+                fail_msg("%s: importance-sampled power channel %d = %.9g, integral %.9g, tolerance %.3g",
                          maps[k].name, c, mean_of(&is[c]), ref[c], tol);
             double tol_u = 4 * sigma_of(&uni[c]) / sqrt((double)N);
             if (fabs(mean_of(&uni[c]) - ref[c]) > tol_u)
-                fail_msg("%s: uniformly sampled power channel %d = %.9g, pixel sum %.9g, tolerance %.3g",
+                fail_msg("%s: uniformly sampled power channel %d = %.9g, integral %.9g, tolerance %.3g",
                          maps[k].name, c, mean_of(&uni[c]), ref[c], tol_u);
         }
         double ref_lum = 0.2126 * ref[0] + 0.7152 * ref[1] + 0.0722 * ref[2];
-        print_message("%s: power R %.6g (IS %.6g +- %.2g, uniform %.6g +- %.2g); "
-                      "luminance sigma %.3g (zero-variance)\n",
+        double tol_l = 4 * sigma_of(&is[3]) / sqrt((double)N) + 1e-5 * ref_lum;
+        print_message("%s: power R %.6g (IS %.6g +- %.2g, uniform %.6g +- %.2g); luminance sigma %.3g, "
+                      "largest L/pdf %.6g of P_w %.6g\n",
                       maps[k].name, ref[0], mean_of(&is[0]), sigma_of(&is[0]) / sqrt((double)N), mean_of(&uni[0]),
-                      sigma_of(&uni[0]) / sqrt((double)N), sigma_of(&is[3]));
-        if (fabs(mean_of(&is[3]) - ref_lum) > 1e-5 * ref_lum || sigma_of(&is[3]) > 1e-5 * ref_lum)
-            fail_msg("%s: luminance estimator mean %.9g sigma %.3g, want %.9g with sigma ~ 0", maps[k].name,
-                     mean_of(&is[3]), sigma_of(&is[3]), ref_lum);
+                      sigma_of(&uni[0]) / sqrt((double)N), sigma_of(&is[3]), lum_max, pw);
+        if (fabs(mean_of(&is[3]) - ref_lum) > tol_l)
+            fail_msg("%s: luminance estimator mean %.9g, want %.9g +- %.3g", maps[k].name, mean_of(&is[3]), ref_lum,
+                     tol_l);
+        if (!(lum_max <= pw * (1 + 1e-5)))
+            fail_msg("%s: lum(L) / pdf reached %.9g, above the sampling power %.9g", maps[k].name, lum_max, pw);
     }
     free_test_maps(maps);
 }
@@ -702,7 +917,7 @@ static void test_envmap_bad_texels_counted_and_zeroed(void **state)
     const int bad[] = {1, 2, 5, 9, 10, 11};
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         int i = bad[k] % W, j = bad[k] / W;
-        sg_vec3 L = sg_envmap_eval(m, sg_envmap_uv_to_dir(NULL, (i + 0.5f) / W, (j + 0.5f) / H));
+        sg_vec3 L = sg_envmap_texel(m, i, j);
         const float want[3] = {0.5f * 3, 0.5f * 3, 0.5f * 3};
         const float got[3] = {L.x, L.y, L.z};
         for (int c = 0; c < 3; c++) {
@@ -824,6 +1039,56 @@ static void test_envmap_create_rejects_bad_input(void **state)
     sg_image_free(&img);
 }
 
+/* Loud failures: a map file with no finite positive texel (all NaN, or all
+ * zero and negative) used to light scenes black with exit 0; a map whose
+ * power overflows baked infinite light. Both are refused, naming the file
+ * and the figures; an all-black image made in memory (a dark sky on
+ * purpose) still falls back to uniform sampling. */
+static void test_envmap_refuses_unusable_maps(void **state)
+{
+    (void)state;
+    sg_image img = {0};
+    assert_int_equal(sg_image_alloc(&img, 16, 8, NULL), SG_OK);
+    char path[700];
+    for (int t = 0; t < 3 * 16 * 8; t++)
+        img.data[t] = NAN;
+    img.data[7] = INFINITY;
+    snprintf(path, sizeof path, "%s/all_nan.exr", sg_test_tmpdir());
+    assert_int_equal(sg_image_write_exr(&img, path, NULL), SG_OK);
+    expect_create_fails(&(sg_envmap_desc){.path = path}, SG_ERR_CORRUPT,
+                        "all_nan.exr: no texel has a finite positive value (128 of 128 texels NaN or infinite",
+                        "all-NaN file");
+    for (int t = 0; t < 3 * 16 * 8; t++)
+        img.data[t] = t % 2 ? 0.0f : -1.0f;
+    snprintf(path, sizeof path, "%s/all_dark.exr", sg_test_tmpdir());
+    assert_int_equal(sg_image_write_exr(&img, path, NULL), SG_OK);
+    expect_create_fails(&(sg_envmap_desc){.path = path}, SG_ERR_CORRUPT, "no texel has a finite positive value",
+                        "black and negative file");
+    /* Values near float's largest: finite texels, infinite light. */
+    for (int t = 0; t < 3 * 16 * 8; t++)
+        img.data[t] = 3e38f;
+    snprintf(path, sizeof path, "%s/huge.exr", sg_test_tmpdir());
+    assert_int_equal(sg_image_write_exr(&img, path, NULL), SG_OK);
+    expect_create_fails(&(sg_envmap_desc){.path = path}, SG_ERR_INVALID_ARG,
+                        "huge.exr: the map's power (radiance over the sphere, intensity 1 applied) is",
+                        "3e38 file");
+    expect_create_fails(&(sg_envmap_desc){.image = &img}, SG_ERR_INVALID_ARG, "more than sums of light values can "
+                        "hold", "3e38 image");
+    /* Just under the limit is fine: 1e30 everywhere (power 1.3e31). */
+    for (int t = 0; t < 3 * 16 * 8; t++)
+        img.data[t] = 1e30f;
+    sg_envmap *m = make_map(&img, 0, 0);
+    sg_envmap_destroy(m);
+    /* An all-black image in memory is a dark sky: uniform fallback. */
+    memset(img.data, 0, 3 * 16 * 8 * sizeof(float));
+    m = make_map(&img, 0, 0);
+    sg_envmap_info info;
+    sg_envmap_get_info(m, &info);
+    assert_int_equal(info.uniform_fallback, 1);
+    sg_envmap_destroy(m);
+    sg_image_free(&img);
+}
+
 /* Paths: an EXR written here (by extension and, renamed, by magic), and
  * the real maps; DWAB negatives are counted, PIZ and .hdr have none. */
 static void test_envmap_load_files(void **state)
@@ -843,8 +1108,9 @@ static void test_envmap_load_files(void **state)
         fail_msg("%s: %s", noext, err.message);
     sg_vec3 p = sg_envmap_power(m);
     double ref[3];
-    pixel_power(&img, ref);
-    assert_true(fabs(p.x - ref[0]) < 1e-5 * ref[0]);
+    bilinear_power_ref(&img, ref);
+    if (!(fabs(p.x - ref[0]) < 1e-5 * ref[0]))
+        fail_msg("%s: power %.9g, integral of the lookup %.9g", noext, (double)p.x, ref[0]);
     sg_envmap_destroy(m);
     sg_image_free(&img);
 
@@ -890,12 +1156,14 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_envmap_mapping_axes_and_roundtrip),
-        cmocka_unit_test(test_envmap_eval_nearest_and_rotation),
+        cmocka_unit_test(test_envmap_eval_bilinear_and_rotation),
+        cmocka_unit_test(test_envmap_eval_continuous),
         cmocka_unit_test(test_envmap_invert_roundtrip),
         cmocka_unit_test(test_envmap_sample_pdf_matches_pdf),
         cmocka_unit_test(test_envmap_pdf_integrates_to_one),
         cmocka_unit_test(test_envmap_chi_square),
         cmocka_unit_test(test_envmap_black_texels_never_sampled),
+        cmocka_unit_test(test_envmap_lit_lookup_has_positive_pdf),
         cmocka_unit_test(test_envmap_power_estimators),
         cmocka_unit_test(test_envmap_studio_closed_form),
         cmocka_unit_test(test_envmap_uniform_irradiance),
@@ -904,6 +1172,7 @@ int main(void)
         cmocka_unit_test(test_envmap_intensity_scales_radiance_not_pdf),
         cmocka_unit_test(test_envmap_all_black_is_uniform),
         cmocka_unit_test(test_envmap_create_rejects_bad_input),
+        cmocka_unit_test(test_envmap_refuses_unusable_maps),
         cmocka_unit_test(test_envmap_load_files),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

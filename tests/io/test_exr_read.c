@@ -271,7 +271,7 @@ static void test_exr_read_real_files(void **state)
 
 static void read_fails(const char *path, const char *name, sg_status want1, sg_status want2)
 {
-    sg_image img = {7, 9, (float *)&img}; /* sentinel: must stay */
+    sg_image img = {7, 9, (float *)&img, NULL}; /* sentinel: must stay */
     sg_exr_read_info info = {.tiled = 42};
     sg_error err = {0};
     sg_status st = sg_exr_read(path, &img, &info, &err);
@@ -350,9 +350,51 @@ static void test_exr_read_truncated_and_corrupt(void **state)
     read_fails(missing, "does_not_exist.exr", SG_ERR_IO, SG_ERR_IO);
 }
 
+/* A header claiming 20000 x 10000 pixels in a ~100 KB ZIP file: refused
+ * from the header and the file size, before any pixel is allocated (it
+ * took 10 s to fail in the decoder), naming both figures. The bytes of
+ * dataWindow (box2i: 4 int32 after "dataWindow\0box2i\0" and its size)
+ * are patched in the written file. */
+static void test_exr_read_data_window_against_file_size(void **state)
+{
+    (void)state;
+    /* Noise does not compress: ~100 KB, so the 625-entry chunk table the
+     * patched header calls for lies inside the file. */
+    sg_image src = {0};
+    assert_int_equal(sg_image_alloc(&src, 128, 64, NULL), SG_OK);
+    uint64_t rng = 7;
+    for (int i = 0; i < 3 * 128 * 64; i++)
+        src.data[i] = sg_test_rand01(&rng);
+    char src_path[600];
+    snprintf(src_path, sizeof src_path, "%s/window_src.exr", sg_test_tmpdir());
+    assert_int_equal(sg_image_write_exr(&src, src_path, NULL), SG_OK);
+    sg_image_free(&src);
+    size_t size;
+    unsigned char *data = slurp(src_path, &size);
+    static const char key[] = "dataWindow\0box2i\0";
+    unsigned char *at = NULL;
+    for (size_t i = 0; i + sizeof key + 20 < size && !at; i++)
+        if (memcmp(data + i, key, sizeof key - 1) == 0)
+            at = data + i + sizeof key - 1 + 4;
+    assert_non_null(at);
+    const int32_t box[4] = {0, 0, 19999, 9999}; /* little-endian host, as the file */
+    memcpy(at, box, sizeof box);
+    const char *path = sg_test_write_file("claims_20000x10000.exr", data, size);
+    sg_image img = {0};
+    sg_error err = {0};
+    sg_status st = sg_exr_read(path, &img, NULL, &err);
+    if (st != SG_ERR_CORRUPT || !strstr(err.message, "claims_20000x10000.exr: data window 20000x10000 (zip "
+                                                     "compression) needs at least") ||
+        !strstr(err.message, "the file has"))
+        fail_msg("got %s \"%s\"", sg_status_name(st), err.message);
+    assert_null(img.data);
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exr_read_data_window_against_file_size),
         cmocka_unit_test(test_exr_read_fixtures_roundtrip),
         cmocka_unit_test(test_exr_read_luminance_chroma),
         cmocka_unit_test(test_exr_read_real_files),

@@ -64,7 +64,7 @@ static sg_image read_ok(const char *name, const bytes *f)
 static void read_fails(const char *name, const bytes *f, sg_status want, const char *needle)
 {
     const char *path = sg_test_write_file(name, f->b, f->n);
-    sg_image img = {7, 9, (float *)&img}; /* sentinel: must stay */
+    sg_image img = {7, 9, (float *)&img, NULL}; /* sentinel: must stay */
     sg_error err = {0};
     sg_status st = sg_hdr_read(path, &img, &err);
     if (st != want)

@@ -70,7 +70,6 @@ static void test_obj_geometry_roundtrip(void **state)
                        "usemtl red\r\n"
                        "f 1 2/1 3/2 4/3\r\n"   /* quad: (0,1,2) (0,2,3) */
                        "f -4//1 -3/1/1 -1\t# trailing comment\r\n"
-                       "f 1 2\r\n"             /* degenerate: dropped */
                        "l 1 2\r\n";
     sg_mesh m = read_ok("geometry.obj", good);
     assert_int_equal(m.vertex_count, 4);
@@ -287,6 +286,19 @@ static void test_obj_malformed_corner(void **state)
                 "line 4: malformed face corner '3//0'");
 }
 
+/* A face of fewer than 3 corners is no polygon: accepted, it used to turn
+ * the model into a point cloud of its vertices (one splat filling the
+ * frame); now the line and the reason. */
+static void test_obj_face_with_fewer_than_3_indices(void **state)
+{
+    expect_fail("two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", SG_ERR_CORRUPT,
+                "two.obj: line 4: face has 2 vertex indices; a face needs at least 3");
+    expect_fail("one.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 3\n", SG_ERR_CORRUPT,
+                "one.obj: line 5: face has 1 vertex index; a face needs at least 3");
+    expect_fail("none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf\n", SG_ERR_CORRUPT,
+                "none.obj: line 4: face has 0 vertex indices; a face needs at least 3");
+}
+
 static void test_obj_no_vertices(void **state)
 {
     expect_fail("empty.obj", "", SG_ERR_CORRUPT, "no vertices");
@@ -353,6 +365,7 @@ int main(void)
         cmocka_unit_test(test_obj_face_negative_index_out_of_range),
         cmocka_unit_test(test_obj_face_normal_index_out_of_range),
         cmocka_unit_test(test_obj_malformed_corner),
+        cmocka_unit_test(test_obj_face_with_fewer_than_3_indices),
         cmocka_unit_test(test_obj_no_vertices),
         cmocka_unit_test(test_obj_missing_file),
         cmocka_unit_test(test_obj_real_armadillo),

@@ -87,9 +87,9 @@ static const float WANT_COLF[4][3] = {{1, 0, 0.25f}, {0.5f, 0.5f, 0.5f}, {0, 0, 
 static const float VRAD[4] = {0.01f, 0.02f, 0.5f, 1.0f};
 static const int VFLAGS[4] = {-3, 7, 0, 32767};
 static const unsigned VEXTRA_LEN[4] = {0, 2, 1, 3};
-static const unsigned FACE_LEN[3] = {3, 4, 2};
-static const unsigned FACE_IDX[3][4] = {{0, 1, 2}, {0, 2, 3, 1}, {1, 3}};
-static const uint32_t WANT_TRI[3][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}};
+static const unsigned FACE_LEN[3] = {3, 4, 3};
+static const unsigned FACE_IDX[3][4] = {{0, 1, 2}, {0, 2, 3, 1}, {1, 3, 2}};
+static const uint32_t WANT_TRI[4][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
 
 /* Independent of the loader's table: IEC 61966-2-1 decode. */
 static double srgb_decode(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
@@ -205,9 +205,9 @@ static void check_model(fixture_format fx, const sg_mesh *m)
         }
         expect_near(m->radii[i], VRAD[i], 0.0, "radius", i, 0);
     }
-    assert_int_equal(m->triangle_count, 3);
+    assert_int_equal(m->triangle_count, 4);
     assert_non_null(m->triangles);
-    for (int t = 0; t < 3; t++) {
+    for (int t = 0; t < 4; t++) {
         for (int a = 0; a < 3; a++) {
             if (m->triangles[3 * t + a] != WANT_TRI[t][a])
                 fail_msg("triangle %d corner %d: got %u, want %u", t, a, m->triangles[3 * t + a], WANT_TRI[t][a]);
@@ -446,6 +446,85 @@ static void test_ply_color_int_unsupported(void **state)
                        "property int red\nproperty int green\nproperty int blue\nend_header\n0 0 0 1 2 3\n";
     expect_fail(write_text("color_int.ply", text), SG_ERR_UNSUPPORTED, "header: vertex: colour red has type int",
                 NULL);
+}
+
+/* A face of fewer than 3 indices is no polygon (it used to be dropped
+ * quietly, leaving a point cloud when every face was like it). */
+static void test_ply_face_with_fewer_than_3_indices(void **state)
+{
+    const char *text = "ply\nformat ascii 1.0\nelement vertex 3\n" XYZ_HEADER
+                       "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n2 0 1\n";
+    expect_fail(write_text("two_index_face.ply", text), SG_ERR_CORRUPT,
+                "face 1: 2 vertex indices; a face needs at least 3", NULL);
+}
+
+/* Triangle strips (element tristrips, -1 ends a strip): strip triangle k
+ * is (v_k, v_k+1, v_k+2), the first two swapped for odd k so that every
+ * triangle keeps the strip's winding; triangles with a repeated vertex
+ * (stitching) are dropped. Faces and strips in one file both count. */
+static void test_ply_tristrips(void **state)
+{
+    const char *text = "ply\nformat ascii 1.0\nelement vertex 8\n" XYZ_HEADER
+                       "element tristrips 2\nproperty list int int vertex_indices\n"
+                       "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                       "0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 0 0\n2 1 0\n3 0 0\n3 1 0\n"
+                       "8 0 1 2 3 -1 3 4 5\n"
+                       "5 4 5 5 6 7\n"
+                       "3 0 2 1\n";
+    sg_mesh m = {0};
+    sg_error err = {0};
+    sg_status st = sg_ply_read(write_text("strips.ply", text), &m, &err);
+    if (st != SG_OK)
+        fail_msg("%s", err.message);
+    /* strip 1 = 4 5 5 6 7: k0 (4,5,5) and k1 (5,5,6) have a repeated
+     * vertex; k2 is even again: (5,6,7), as OpenGL draws it. */
+    static const uint32_t expect[][3] = {{0, 1, 2}, {2, 1, 3}, {3, 4, 5}, {5, 6, 7}, {0, 2, 1}};
+    size_t n = sizeof expect / sizeof expect[0];
+    if (m.triangle_count != n)
+        fail_msg("%zu triangles, want %zu", m.triangle_count, n);
+    /* Strips first (file order: the tristrips element comes first). */
+    for (size_t t = 0; t < n; ++t)
+        for (int a = 0; a < 3; ++a)
+            if (m.triangles[3 * t + a] != expect[t][a])
+                fail_msg("triangle %zu corner %d: %u, want %u", t, a, m.triangles[3 * t + a], expect[t][a]);
+    sg_mesh_free(&m);
+
+    /* Binary big-endian strip, uint indices with 0xFFFFFFFF as the end. */
+    bytes b;
+    memset(&b, 0, sizeof b);
+    b.be = true;
+    put_str(&b, "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n");
+    for (int v = 0; v < 4; ++v) {
+        put_f32(&b, (float)(v & 1));
+        put_f32(&b, (float)(v >> 1));
+        put_f32(&b, 0.0f);
+    }
+    put_i32(&b, 5);
+    put_i32(&b, 0);
+    put_i32(&b, 1);
+    put_i32(&b, 2);
+    put_i32(&b, 3);
+    put_i32(&b, -1);
+    st = sg_ply_read(write_bytes("strips_be.ply", &b), &m, &err);
+    if (st != SG_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(m.triangle_count, 2);
+    assert_true(m.triangles[3] == 2 && m.triangles[4] == 1 && m.triangles[5] == 3);
+    sg_mesh_free(&m);
+
+    /* Bad strips: an index out of range, a negative index other than -1. */
+    text = "ply\nformat ascii 1.0\nelement vertex 3\n" XYZ_HEADER
+           "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n4 0 1 2 7\n";
+    expect_fail(write_text("strip_range.ply", text), SG_ERR_CORRUPT,
+                "tristrips 0: vertex index 7 out of range (3 vertices)", NULL);
+    text = "ply\nformat ascii 1.0\nelement vertex 3\n" XYZ_HEADER
+           "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n4 0 1 2 -2\n";
+    expect_fail(write_text("strip_neg.ply", text), SG_ERR_CORRUPT,
+                "tristrips 0: negative vertex index -2 (only -1 may end a strip)", NULL);
 }
 
 static void test_ply_face_index_out_of_range(void **state)
@@ -785,6 +864,8 @@ int main(void)
         cmocka_unit_test(test_ply_color_nan),
         cmocka_unit_test(test_ply_color_int_unsupported),
         cmocka_unit_test(test_ply_face_index_out_of_range),
+        cmocka_unit_test(test_ply_face_with_fewer_than_3_indices),
+        cmocka_unit_test(test_ply_tristrips),
         cmocka_unit_test(test_ply_face_negative_index),
         cmocka_unit_test(test_ply_list_count_runs_past_file),
         cmocka_unit_test(test_ply_list_negative_length),

@@ -72,12 +72,13 @@ static void assert_v3(const char *what, sg_vec3 v, float x, float y, float z)
 static const char *FULL =
     "{ 'models': [\n"
     "    { 'path': 'meshes/bunny.ply', 'points': 1000, 'radius_k': 12, 'radius_scale': 1.5,\n"
-    "      'transform': {'translate': [1, 2, 3], 'rotate_deg': [10, 20, 30], 'scale': [2, 3, 4]},\n"
+    "      'radius_cap': 20, 'drop_outliers': true,\n"
+    "      'transform': {'up': 'z', 'translate': [1, 2, 3], 'rotate_deg': [10, 20, 30], 'scale': [2, 3, 4]},\n"
     "      'material': {'type': 'ggx', 'albedo': [0.1, 0.2, 0.3], 'roughness': 0.6, 'specular': 0.25,\n"
     "                   'emission': [4, 5, 6], 'use_point_colors': false},\n"
     "      'surface': {'model': 'disk', 'kernel': 'gaussian', 'samples_per_cell': 16,\n"
     "                  'refinements': {'shrink': false, 'encourage': true, 'collapse': false}} },\n"
-    "    { 'builtin': 'ground', 'transform': {'scale': 5} } ],\n"
+    "    { 'builtin': 'ground', 'radius_cap': 0, 'transform': {'scale': 5, 'up': '-X'} } ],\n"
     "  'envmap': {'path': '/abs/sky.EXR', 'rotation_deg': 90, 'intensity': 2.5},\n"
     "  'cameras': [ {'name': 'main', 'eye': [0, 1, 5], 'look': [0, 1, 0], 'up': [1, 0, 0], 'fov_deg': 35},\n"
     "               {'eye': [5, 5, 5], 'look': [0, 0, 0]} ],\n"
@@ -110,6 +111,9 @@ static void test_scene_file_full_roundtrip(void **state)
     assert_int_equal(m->points.points, 1000);
     assert_int_equal(m->points.radius_k, 12);
     assert_true(m->points.radius_scale == 1.5f);
+    assert_true(m->points.radius_cap == 20.0f);
+    assert_true(m->points.drop_outliers);
+    assert_int_equal(m->transform.up, SG_SCENE_UP_POS_Z);
     assert_v3("translate", m->transform.translate, 1, 2, 3);
     assert_v3("rotate_deg", m->transform.rotate_deg, 10, 20, 30);
     assert_v3("scale", m->transform.scale, 2, 3, 4);
@@ -127,6 +131,9 @@ static void test_scene_file_full_roundtrip(void **state)
     assert_int_equal(m->kind, SG_SCENE_MODEL_GROUND);
     assert_null(m->path);
     assert_v3("uniform scale", m->transform.scale, 5, 5, 5);
+    assert_int_equal(m->transform.up, SG_SCENE_UP_NEG_X);
+    assert_true(m->points.radius_cap < 0.0f); /* 0 in the file: no cap */
+    assert_false(m->points.drop_outliers);
 
     assert_int_equal(sf.env.kind, SG_SCENE_ENV_FILE);
     assert_string_equal(sf.env.path, "/abs/sky.EXR");
@@ -167,6 +174,9 @@ static void test_scene_file_defaults(void **state)
     assert_int_equal(m->points.points, 0);
     assert_int_equal(m->points.radius_k, 8);
     assert_true(m->points.radius_scale == 1.0f);
+    assert_true(m->points.radius_cap == SG_RADIUS_CAP_DEFAULT);
+    assert_false(m->points.drop_outliers);
+    assert_int_equal(m->transform.up, SG_SCENE_UP_POS_Y);
     assert_v3("translate", m->transform.translate, 0, 0, 0);
     assert_v3("rotate_deg", m->transform.rotate_deg, 0, 0, 0);
     assert_v3("scale", m->transform.scale, 1, 1, 1);
@@ -231,7 +241,17 @@ static const bad_case BAD[] = {
      "scene.json: $.models[0].material.use_point_colors: expected true or false, got 1"},
     {M0 "'materal': {}}]}",
      "scene.json: $.models[0].materal: unknown key (expected one of: path, builtin, points, radius_k, "
-     "radius_scale, transform, material, surface)"},
+     "radius_scale, radius_cap, drop_outliers, transform, material, surface)"},
+    {M0 "'radius_cap': 0.5}]}",
+     "scene.json: $.models[0].radius_cap: expected 0 (no cap) or a number in [1,1000000], got 0.5"},
+    {M0 "'drop_outliers': 'yes'}]}",
+     "scene.json: $.models[0].drop_outliers: expected true or false, got 'yes'"},
+    {M0 "'transform': {'up': 'w'}}]}",
+     "scene.json: $.models[0].transform.up: expected one of '+y', '-y', '+z', '-z', '+x', '-x' (the sign may be "
+     "left out), got 'w'"},
+    {M0 "'transform': {'up': '++z'}}]}",
+     "scene.json: $.models[0].transform.up: expected one of '+y', '-y', '+z', '-z', '+x', '-x' (the sign may be "
+     "left out), got '++z'"},
     {M0 "'points': 10, 'points': 20}]}", "scene.json: $.models[0].points: key appears more than once"},
     {M0 "'points': 12.5}]}", "scene.json: $.models[0].points: expected an integer in [1,1000000000], got 12.5"},
     {M0 "'radius_k': 0}]}", "scene.json: $.models[0].radius_k: expected an integer in [1,64], got 0"},
@@ -241,7 +261,7 @@ static const bad_case BAD[] = {
     {M0 "'transform': {'scale': 'big'}}]}",
      "scene.json: $.models[0].transform.scale: expected a number in (0,1000000] or an array of 3 of them, got 'big'"},
     {M0 "'transform': {'rotate': [0, 90, 0]}}]}",
-     "scene.json: $.models[0].transform.rotate: unknown key (expected one of: translate, rotate_deg, scale)"},
+     "scene.json: $.models[0].transform.rotate: unknown key (expected one of: up, translate, rotate_deg, scale)"},
     {M0 "'surface': {'model': 'splat'}}]}",
      "scene.json: $.models[0].surface.model: expected one of 'mls', 'disk', got 'splat'"},
     {M0 "'surface': {'refinements': {'shrnk': false}}}]}",
@@ -252,7 +272,11 @@ static const bad_case BAD[] = {
     {"{'models': [{'builtin': 'dragon'}]}",
      "scene.json: $.models[0].builtin: expected one of 'bunny', 'ground', 'sphere', got 'dragon'"},
     {"{'models': [{'path': 'bunny.stl'}]}",
-     "scene.json: $.models[0].path: expected a .ply or .obj file path, got 'bunny.stl'"},
+     "scene.json: $.models[0].path: expected a .ply, .obj, .xyz, .txt or .pcd file path, got 'bunny.stl'"},
+    /* a long value keeps its end, where a path's extension is */
+    {"{'models': [{'path': 'scans/2024-05-01/session_three/raw_export_bunny.stl'}]}",
+     "scene.json: $.models[0].path: expected a .ply, .obj, .xyz, .txt or .pcd file path, got "
+     "'scans/2024-05-01/ses..._export_bunny.stl'"},
     {"{'models': [{'points': 5}]}", "scene.json: $.models[0]: missing required key 'path' or 'builtin'"},
     {"{'models': [{'path': 'a.ply', 'builtin': 'bunny'}]}",
      "scene.json: $.models[0]: give either 'path' or 'builtin', not both"},
@@ -460,7 +484,7 @@ static void assert_near3(const char *what, sg_vec3 v, float x, float y, float z)
 static void test_scene_file_transform(void **state)
 {
     (void)state;
-    sg_scene_transform t = {{0, 0, 0}, {0, 90, 0}, {1, 1, 1}};
+    sg_scene_transform t = {{0, 0, 0}, {0, 90, 0}, {1, 1, 1}, SG_SCENE_UP_POS_Y};
     /* Right-handed rotation about +Y by 90 degrees takes +X to -Z. */
     assert_near3("Ry(90) x", sg_scene_transform_point(&t, sg_v3(1, 0, 0)), 0, 0, -1);
     /* XYZ order: X first. Rx(90) takes +Y to +Z, then Ry(90) takes +Z to +X;
@@ -470,10 +494,10 @@ static void test_scene_file_transform(void **state)
     t.rotate_deg = sg_v3(0, 0, 90);
     assert_near3("Rz(90) x", sg_scene_transform_point(&t, sg_v3(1, 0, 0)), 0, 1, 0);
     /* Scale, then rotate, then translate. */
-    t = (sg_scene_transform){{1, 2, 3}, {0, 0, 90}, {2, 3, 4}};
+    t = (sg_scene_transform){{1, 2, 3}, {0, 0, 90}, {2, 3, 4}, SG_SCENE_UP_POS_Y};
     assert_near3("T R S p", sg_scene_transform_point(&t, sg_v3(1, 1, 1)), 1 - 3, 2 + 2, 3 + 4);
     /* Normals stay perpendicular to transformed tangents. */
-    t = (sg_scene_transform){{5, 0, 0}, {30, 40, 50}, {1, 4, 0.5f}};
+    t = (sg_scene_transform){{5, 0, 0}, {30, 40, 50}, {1, 4, 0.5f}, SG_SCENE_UP_POS_Z};
     sg_vec3 n = sg_v3_normalize(sg_v3(1, 1, 1)), a = sg_v3(1, -1, 0), b = sg_v3(0, 1, -1);
     sg_vec3 tn = sg_scene_transform_normal(&t, n);
     sg_vec3 o = sg_scene_transform_point(&t, sg_v3(0, 0, 0));
@@ -483,6 +507,57 @@ static void test_scene_file_transform(void **state)
         fail_msg("normal (%g,%g,%g): |n'| = %g, n'.a' = %g, n'.b' = %g", tn.x, tn.y, tn.z, sg_v3_length(tn),
                  sg_v3_dot(tn, ta), sg_v3_dot(tn, tb));
     assert_true(sg_scene_transform_radius(&t, 0.5f) == 2.0f);
+}
+
+/* The up axis: each choice takes its axis to +Y by a proper rotation
+ * (x' cross y' = z', so a mesh keeps its winding), applied before scale,
+ * rotation and translation; names parse with or without a sign. */
+static void test_scene_file_up_axis(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name;
+        sg_scene_up up;
+        sg_vec3 axis; /* the model axis that must come out as +Y */
+    } ups[] = {{"+y", SG_SCENE_UP_POS_Y, {0, 1, 0}},  {"-y", SG_SCENE_UP_NEG_Y, {0, -1, 0}},
+               {"+z", SG_SCENE_UP_POS_Z, {0, 0, 1}},  {"-z", SG_SCENE_UP_NEG_Z, {0, 0, -1}},
+               {"+x", SG_SCENE_UP_POS_X, {1, 0, 0}},  {"-x", SG_SCENE_UP_NEG_X, {-1, 0, 0}}};
+    for (size_t i = 0; i < sizeof ups / sizeof ups[0]; ++i) {
+        sg_scene_up u = (sg_scene_up)99;
+        assert_int_equal(sg_scene_up_parse(ups[i].name, &u), SG_OK);
+        assert_int_equal(u, ups[i].up);
+        assert_string_equal(sg_scene_up_name(u), ups[i].name);
+        assert_v3(ups[i].name, sg_scene_up_apply(u, ups[i].axis), 0, 1, 0);
+        sg_vec3 x = sg_scene_up_apply(u, sg_v3(1, 0, 0)), y = sg_scene_up_apply(u, sg_v3(0, 1, 0)),
+                z = sg_scene_up_apply(u, sg_v3(0, 0, 1));
+        sg_vec3 c = sg_v3_cross(x, y);
+        if (c.x != z.x || c.y != z.y || c.z != z.z)
+            fail_msg("%s is not a rotation: x' cross y' = (%g,%g,%g), z' = (%g,%g,%g)", ups[i].name, c.x, c.y, c.z,
+                     z.x, z.y, z.z);
+    }
+    sg_scene_up u = SG_SCENE_UP_POS_Y;
+    assert_int_equal(sg_scene_up_parse("Z", &u), SG_OK);
+    assert_int_equal(u, SG_SCENE_UP_POS_Z);
+    assert_int_equal(sg_scene_up_parse("x", &u), SG_OK);
+    assert_int_equal(u, SG_SCENE_UP_POS_X);
+    const char *bad[] = {"", "+", "w", "zz", "+-z", "up", NULL};
+    for (int i = 0; bad[i]; ++i)
+        assert_int_equal(sg_scene_up_parse(bad[i], &u), SG_ERR_INVALID_ARG);
+    assert_int_equal(u, SG_SCENE_UP_POS_X); /* untouched */
+    /* Z-up then translate: a point 2 above the model's base lands 2 above
+     * the translated origin. */
+    sg_scene_transform t = {{10, 0, 0}, {0, 0, 0}, {1, 1, 1}, SG_SCENE_UP_POS_Z};
+    assert_near3("Z-up point", sg_scene_transform_point(&t, sg_v3(0, 0, 2)), 10, 2, 0);
+    assert_near3("Z-up normal", sg_scene_transform_normal(&t, sg_v3(0, 0, 1)), 0, 1, 0);
+    /* The up axis is part of the bake's scene hash. */
+    sg_scene_file a = parse_ok(json("{'models': [{'builtin': 'bunny'}]}"));
+    sg_scene_file b = parse_ok(json("{'models': [{'builtin': 'bunny', 'transform': {'up': 'z'}}]}"));
+    sg_scene_file c2 = parse_ok(json("{'models': [{'builtin': 'bunny', 'transform': {'up': '+y'}}]}"));
+    assert_true(sg_scene_file_hash(&a, SG_SCENE_HASH_BAKE) != sg_scene_file_hash(&b, SG_SCENE_HASH_BAKE));
+    assert_true(sg_scene_file_hash(&a, SG_SCENE_HASH_BAKE) == sg_scene_file_hash(&c2, SG_SCENE_HASH_BAKE));
+    sg_scene_file_free(&a);
+    sg_scene_file_free(&b);
+    sg_scene_file_free(&c2);
 }
 
 /* ---- 8 ---------------------------------------------------------------- */
@@ -538,7 +613,7 @@ int main(void)
         cmocka_unit_test(test_scene_file_bad_values),      cmocka_unit_test(test_scene_file_malformed_json),
         cmocka_unit_test(test_scene_file_path_resolution), cmocka_unit_test(test_scene_file_hash),
         cmocka_unit_test(test_scene_file_transform),       cmocka_unit_test(test_scene_file_examples),
-        cmocka_unit_test(test_scene_file_io_error),
+        cmocka_unit_test(test_scene_file_io_error),         cmocka_unit_test(test_scene_file_up_axis),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

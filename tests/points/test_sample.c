@@ -36,6 +36,7 @@
 
 #include "core/alloc.h"
 #include "io/mesh.h"
+#include "points/model_points.h"
 #include "points/normals.h"
 #include "points/radius.h"
 #include "points/sample.h"
@@ -580,6 +581,146 @@ static void test_radius_duplicates(void **state)
     sg_pointset_free(&ps);
 }
 
+
+/* Stray points far from a scan (raw, unaligned range scans) would get
+ * radii of their distance to the rest and cover the frame: the model
+ * pipeline caps every radius at 8 x the median. 30 x 30 grid of spacing h,
+ * plus three points 100 h away from it and from each other. */
+static void test_radius_stray_points_capped(void **state)
+{
+    (void)state;
+    const float h = 0.125f;
+    sg_mesh m = mesh_new(903, 0);
+    for (size_t v = 0; v < 900; ++v)
+        set_v(&m, v, h * (float)(v % 30), 0.0f, h * (float)(v / 30));
+    set_v(&m, 900, 100.0f * h, 50.0f * h, 0.0f);
+    set_v(&m, 901, -100.0f * h, 60.0f * h, 0.0f);
+    set_v(&m, 902, 0.0f, -80.0f * h, 100.0f * h);
+    sg_pointset ps = {0};
+    sg_error err;
+    sg_model_points_desc d = {.radius_k = 8};
+    sg_status s = sg_model_points_from_mesh(&m, "strays.xyz", &d, &ps, &err);
+    if (s != SG_OK)
+        fail_msg("%s", err.message);
+    const float median = 0.17677669f; /* sqrt(2) h: interior points' 8th neighbour */
+    float biggest = 0.0f;
+    for (size_t i = 0; i < ps.count; ++i)
+        biggest = ps.radius[i] > biggest ? ps.radius[i] : biggest;
+    if (!(biggest <= 8.0f * median * 1.0001f))
+        fail_msg("largest radius %.6g, want at most 8 x the median spacing %.6g", (double)biggest,
+                 (double)(8.0f * median));
+    assert_int_equal(ps.count, 903);
+    sg_pointset_free(&ps);
+
+    /* The report counts them; the cap is exactly 8 x the median. */
+    sg_model_points_report rep;
+    memset(&rep, 0xAB, sizeof rep);
+    d.report = &rep;
+    assert_int_equal(sg_model_points_from_mesh(&m, "strays.xyz", &d, &ps, &err), SG_OK);
+    assert_int_equal(rep.capped, 3);
+    assert_int_equal(rep.dropped, 0);
+    assert_true(fabsf(rep.median_radius - median) < 1e-6f);
+    assert_true(rep.cap_radius == 8.0f * rep.median_radius);
+    assert_true(ps.radius[900] == rep.cap_radius && ps.radius[902] == rep.cap_radius);
+    assert_false(rep.has_colors);
+    assert_int_equal(rep.file_vertices, 903);
+    sg_pointset_free(&ps);
+
+    /* drop_outliers removes them: the grid alone, its radii untouched. */
+    d.drop_outliers = true;
+    assert_int_equal(sg_model_points_from_mesh(&m, "strays.xyz", &d, &ps, &err), SG_OK);
+    assert_int_equal(ps.count, 900);
+    assert_int_equal(rep.dropped, 3);
+    assert_int_equal(rep.capped, 0);
+    for (size_t i = 0; i < ps.count; ++i)
+        assert_true(fabsf(ps.py[i]) == 0.0f && ps.radius[i] <= 0.36f); /* corners: sqrt(8) h */
+    sg_pointset_free(&ps);
+
+    /* A cap of 20 leaves these strays (~12.5 / 0.177 = 70x) capped; a
+     * negative cap (none) keeps their full radii. */
+    d.drop_outliers = false;
+    d.radius_cap = -1.0f;
+    assert_int_equal(sg_model_points_from_mesh(&m, "strays.xyz", &d, &ps, &err), SG_OK);
+    assert_int_equal(rep.capped, 0);
+    assert_true(isinf(rep.cap_radius));
+    assert_true(ps.radius[900] > 10.0f);
+    sg_pointset_free(&ps);
+    d.radius_cap = 0.5f;
+    assert_int_equal(sg_model_points_from_mesh(&m, "strays.xyz", &d, &ps, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "strays.xyz"));
+    sg_mesh_free(&m);
+}
+
+/* The median is the exact middle order statistic, for the awkward cases
+ * of the select: many equal values, sorted and reversed input. */
+static void test_radius_cap_median_exact(void **state)
+{
+    (void)state;
+    sg_error err;
+    for (int pattern = 0; pattern < 3; ++pattern) {
+        /* 101 points on a line with spacings chosen per pattern; k = 1: the
+         * radius is the distance to the nearest neighbour. */
+        sg_pointset ps;
+        assert_int_equal(sg_pointset_alloc(&ps, 101, &err), SG_OK);
+        float x = 0.0f;
+        for (size_t i = 0; i < 101; ++i) {
+            ps.px[i] = x;
+            ps.py[i] = ps.pz[i] = 0.0f;
+            float gap = pattern == 0 ? 1.0f : pattern == 1 ? 1.0f + (float)i * 0.01f : 2.0f - (float)i * 0.01f;
+            x += gap;
+        }
+        sg_radius_stats rs;
+        sg_radius_desc d = {.k = 1, .scale = 1.0f, .stats = &rs, .cap = 1000.0f};
+        assert_int_equal(sg_points_estimate_radii(&ps, &d, &err), SG_OK);
+        float sorted[101];
+        memcpy(sorted, ps.radius, sizeof sorted);
+        for (int a = 1; a < 101; ++a) /* insertion sort: the plain reference */
+            for (int b = a; b > 0 && sorted[b - 1] > sorted[b]; --b) {
+                float t = sorted[b];
+                sorted[b] = sorted[b - 1];
+                sorted[b - 1] = t;
+            }
+        if (rs.median != sorted[50] || rs.capped != 0)
+            fail_msg("pattern %d: median %.9g, want %.9g; capped %zu", pattern, (double)rs.median,
+                     (double)sorted[50], rs.capped);
+        sg_pointset_free(&ps);
+    }
+}
+
+/* Faces: a repeated triangle (same vertices, either winding) is left out,
+ * and faces wound against their neighbours are turned; a closed piece
+ * faces outward. Tetrahedron with face 2 reversed, face 0 repeated
+ * reversed: 1 repeat, 1 turned; normals point away from the centre. */
+static void test_sample_faces_oriented_and_deduplicated(void **state)
+{
+    (void)state;
+    sg_mesh m = mesh_new(4, 5);
+    set_v(&m, 0, 1, 1, 1);
+    set_v(&m, 1, 1, -1, -1);
+    set_v(&m, 2, -1, 1, -1);
+    set_v(&m, 3, -1, -1, 1);
+    set_t(&m, 0, 0, 1, 2); /* outward: (0,1,2) has normal along +(1,1,-1)... */
+    set_t(&m, 1, 0, 3, 1);
+    set_t(&m, 2, 0, 3, 2); /* wound the other way round than its neighbours */
+    set_t(&m, 3, 1, 3, 2);
+    set_t(&m, 4, 2, 1, 0); /* face 0 again, reversed */
+    size_t turned = 99, repeated = 99;
+    sg_sample_desc d = {.count = 4000, .faces_turned = &turned, .faces_repeated = &repeated};
+    sg_pointset ps;
+    sg_error err;
+    if (sg_points_sample_mesh(&m, &d, &ps, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(repeated, 1);
+    assert_true(turned == 1 || turned == 3); /* the odd one, or the other three */
+    size_t inward = 0;
+    for (size_t i = 0; i < ps.count; ++i)
+        inward += sg_v3_dot(sg_pointset_position(&ps, i), sg_pointset_normal(&ps, i)) <= 0.0f;
+    if (inward)
+        fail_msg("%zu of %zu samples have normals pointing into the tetrahedron", inward, ps.count);
+    sg_pointset_free(&ps);
+    sg_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -593,6 +734,9 @@ int main(void)
         cmocka_unit_test(test_sample_from_vertices),
         cmocka_unit_test(test_radius_grid),
         cmocka_unit_test(test_radius_duplicates),
+        cmocka_unit_test(test_sample_faces_oriented_and_deduplicated),
+        cmocka_unit_test(test_radius_stray_points_capped),
+        cmocka_unit_test(test_radius_cap_median_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -8,7 +8,11 @@
  *   3. the window under xvfb-run: the screenshot read back from GL is not
  *      blank and matches the headless frame (mean abs difference < 2/255);
  *      skipped without xvfb-run
- *   4. no display: the message and exit 1; no --bake: how to make one
+ *   4. no display: the message and exit 1, before the world is built (a
+ *      DISPLAY that names no server is found out at once, not after
+ *      building the world and loading the bake); a --bake for another
+ *      scene is refused from its header, before the world; the key help
+ *      is printed when the window opens (test 3)
  */
 #include "test_support.h"
 
@@ -279,6 +283,9 @@ static void test_window_screenshot(void **state)
             var, mad);
     assert_true(var > 1e-3);            /* not blank: a sphere, ground and sky */
     assert_true(mad < 2.0 / 255.0);
+    /* How to move, said once the window is open. */
+    assert_true(file_has(log, "Keys: W/A/S/D or arrows move"));
+    assert_true(file_has(log, "P screenshot"));
     free(a);
     free(b);
 }
@@ -287,16 +294,39 @@ static void test_window_screenshot(void **state)
 static void test_no_display_no_bake(void **state)
 {
     fixture *f = *state;
-    char cmd[4096], log[1200];
+    char cmd[8192], log[1200];
     snprintf(log, sizeof log, "%s/nodisplay.log", f->dir);
     snprintf(cmd, sizeof cmd, "env -u DISPLAY -u WAYLAND_DISPLAY '%s' '%s' --bake '%s' > '%s' 2>&1", VIEW_BIN,
              f->scene, f->bake_path, log);
     assert_int_equal(run(cmd), 1);
     assert_true(file_has(log, "splatgi-view: no display available (DISPLAY is not set); use --headless --path "
                               "walk.txt --out DIR"));
-    snprintf(cmd, sizeof cmd, "'%s' '%s' > '%s' 2>&1", VIEW_BIN, f->scene, log);
+    /* A display that is set but not there: refused before the world (the
+     * world used to be built and the bake loaded first). */
+    snprintf(cmd, sizeof cmd, "env -u WAYLAND_DISPLAY DISPLAY=:87 '%s' '%s' --bake '%s' > '%s' 2>&1", VIEW_BIN,
+             f->scene, f->bake_path, log);
     assert_int_equal(run(cmd), 1);
-    assert_true(file_has(log, "--bake is required; make one with: splatgi-bake"));
+    assert_true(file_has(log, "splatgi-view: no display available (glfwInit failed"));
+    assert_false(file_has(log, "building the world"));
+    assert_false(file_has(log, "models,"));
+    /* A bake of another scene: refused from its header, before the world. */
+    char other[1200];
+    snprintf(other, sizeof other, "%s/other.json", f->dir);
+    FILE *fp = fopen(other, "w");
+    assert_non_null(fp);
+    fputs("{\"models\": [{\"builtin\": \"sphere\", \"points\": 1000}]}", fp);
+    fclose(fp);
+    char walk[1200];
+    snprintf(walk, sizeof walk, "%s/one_key.txt", f->dir);
+    fp = fopen(walk, "w");
+    assert_non_null(fp);
+    fputs("0 0 2 5 0 0 0 0 1 0 40\n", fp);
+    fclose(fp);
+    snprintf(cmd, sizeof cmd, "'%s' '%s' --bake '%s' --headless --path '%s' --out '%s/o' > '%s' 2>&1", VIEW_BIN,
+             other, f->bake_path, walk, f->dir, log);
+    assert_int_equal(run(cmd), 1);
+    assert_true(file_has(log, "scene.sgbake: made for another scene"));
+    assert_false(file_has(log, "building the world"));
 }
 
 int main(void)
