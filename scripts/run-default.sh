@@ -18,7 +18,7 @@ bake=out/bunny_sky.sgbake
 # 512 rays per glossy sample point instead of the library's 128: under the
 # broad sky the bunny's glossy bins are visibly grainy at 128 (docs/bake.md,
 # limitations); 512 halves the grain for ~5 s more.
-./build/splatgi-bake "$scene" -o "$bake" --photons 2000000 --glossy-rays 512 --if-stale
+./build/splatgi-bake "$scene" -o "$bake" --glossy-rays 512 --if-stale
 if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ]; then
   exec ./build/splatgi-view "$scene" --bake "$bake" "$@"
 fi
