@@ -85,24 +85,36 @@ typedef struct rung {
     float spacing;           /* sg_bake_desc.sample_spacing (0: default)  */
     int env_rays, cos_rays;  /* direct_samples, gather_rays               */
     size_t photons;          /* photon estimator                           */
+    unsigned k;              /* photon estimator's gather; 0: 64          */
     int is_default;          /* the library's defaults: the budget's bake */
+    int chart;               /* on the error-against-time curve (the rest
+                                are the gather-ray and k sweeps)          */
 } rung;
 
 static const rung ladder[] = {
-    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0},
-    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0},
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 1},
-    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0},
-    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0},
-    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0},
-    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0},
-    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0},
-    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0},
-    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0},
+    /* the transport estimator from coarse to fine: the curve */
+    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0, 0, 1},
+    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0, 0, 1},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 0, 1, 1},
+    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0, 0, 1},
+    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0, 0, 1},
+    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0, 0, 1},
+    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0, 0, 1},
+    /* gather rays alone, at the default spacing and envmap rays */
+    {"32+16", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 16, 0, 0, 0, 0},
+    {"32+32", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 32, 0, 0, 0, 0},
+    {"32+128", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 128, 0, 0, 0, 0},
+    {"32+256", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 256, 0, 0, 0, 0},
+    /* the photon estimator: photons (its curve), then k */
+    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0, 0, 1},
+    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0, 0, 1},
+    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0, 0, 1},
+    {"1M k16", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 16, 0, 0},
+    {"1M k256", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 256, 0, 0},
 };
 static const rung ci_ladder[] = {
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 1},
-    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 0, 1, 1},
+    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0, 0, 1},
 };
 
 typedef struct gplan {
@@ -221,8 +233,8 @@ static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, cons
                           const rung *r, const sg_ref_result *ref, const unsigned char *mask, bake_figs *f,
                           sg_error *err)
 {
-    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .direct_samples = r->env_rays,
-                       .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .gather = {.k = r->k},
+                       .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
     sg_bake *b = NULL;
     double t0 = cpu_now();
     sg_status st = sg_bake_create(w, &bd, &b, err);
@@ -302,8 +314,8 @@ static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const
     if (st != SG_OK)
         return st;
     sg_camera cam = closeup_camera(cu);
-    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .direct_samples = r->env_rays,
-                       .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .gather = {.k = r->k},
+                       .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
     sg_bake *b = NULL;
     sg_image img = {0};
     double t0 = cpu_now();
@@ -353,7 +365,7 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
     vtable t = {0}, ft = {0}, md = {0}, fmd = {0}, bmd = {0};
     sg_verify__tprintf(&t, "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,"
                            "frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,"
-                           "model_pixels,ref_noise,ref_spp,image_size\n");
+                           "model_pixels,ref_noise,ref_spp,image_size,k,chart\n");
     sg_verify__tprintf(&ft, "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s\n");
     sg_verify__tprintf(&md, "Close-ups of concave scans (%zu points each, on the ground), %dx%d lookup frame "
                             "against a %d-spp reference at pixel centres; CPU seconds of both threads; model: "
@@ -410,11 +422,11 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
                 break;
             double total = world_cpu + f.bake_cpu + f.frame_cpu;
             sg_verify__tprintf(&t, "%s,%s,%s,%g,%d,%d,%zu,%zu,%.3f,%.3f,%.4f,%d,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%zu,"
-                                   "%.3g,%d,%d\n",
+                                   "%.3g,%d,%d,%u,%d\n",
                                cu->name, r->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", r->label,
                                (double)r->spacing, r->env_rays, r->cos_rays, r->photons, p.points, world_cpu,
                                f.bake_cpu, f.frame_cpu, p.frame, total, f.rel_mse, f.rel_mse_model, f.energy_model,
-                               f.p99, f.within3, f.model_pixels, noise, p.spp, p.image);
+                               f.p99, f.within3, f.model_pixels, noise, p.spp, p.image, r->k ? r->k : 64u, r->chart);
             t.rows++;
             sg_verify__tprintf(&md, "| %s | %s | %.1f | %.5f | %.5f | %.4f | %.3f | %.3f |\n", cu->name, r->label,
                                f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);

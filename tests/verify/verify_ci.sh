@@ -84,7 +84,7 @@ check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,looku
 [ "$(awk -F, 'NR > 1 { print $1 }' "$OUT/headline.csv")" = "bunny" ] || fail "headline.csv: want one bunny row"
 [ -s "$OUT/headline.md" ] || fail "no headline.md"
 # GI: the --ci close-up (the bunny), its two bakes and their furnaces.
-check_csv "$OUT/gi.csv" "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,model_pixels,ref_noise,ref_spp,image_size" "1,2,3"
+check_csv "$OUT/gi.csv" "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,model_pixels,ref_noise,ref_spp,image_size,k,chart" "1,2,3"
 [ "$(awk -F, 'NR > 1 { printf "%s/%s ", $1, $2 }' "$OUT/gi.csv")" = "bunny_ci/transport bunny_ci/photons " ] ||
   fail "gi.csv: want the bunny's transport and photons rows"
 check_csv "$OUT/furnace.csv" "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s" "1,2"
