@@ -381,18 +381,40 @@ static unsigned ray_groups(uint32_t flags)
     return WANT_FRONT | WANT_BACK;
 }
 
-/* key . d for a packed key (splat_soa.h: three int8 in bits 0-7, 8-15,
- * 16-23); only its sign is used. */
-static inline float key_dot(uint32_t key, sg_vec3 d)
+/* Which group a keyed splat joins for a ray, as a number whose sign says
+ * it (< 0: front, > 0: back, NaN: neither; the key is the layer normal l
+ * as three int8, splat_soa.h, so about 127 l). A ray that crosses the
+ * splat's plane inside its support (a wall the ray goes into or out of)
+ * sorts it by direction, key . d: a layer is entered from its front,
+ * moving against its normal, and left from its back; a ray that starts
+ * behind the plane and moves away from its front (or in front, away from
+ * its back) never crosses it and leaves the splat out. A ray that passes
+ * the splat without crossing its plane there sorts it by the side it
+ * passes on: in front (the ray's closest point to the splat, o + tc d,
+ * has (x - p) . l > 0) the front group. There the sign of l . d says
+ * nothing of the ray's side: along a thin floor, its lower layer (facing
+ * down, the ray rising by 4 degrees) would join the front group and pull
+ * the field of a wall ahead below zero, letting the ray through the corner
+ * (the closed thin box of tests/ref/test_pathtrace.c). Per ray and splat,
+ * so each group's field stays continuous along the ray.
+ * With q = p - o: (o + tc d - p) . k = tc (k . d) - q . k, and the ray
+ * meets the plane at t = q . k / k . d, inside the support when
+ * (t - tc)^2 + perp2 < r^2, i.e. (q . k - tc k . d)^2 < (r^2 - perp2) (k . d)^2. */
+static inline float key_side(uint32_t key, sg_vec3 d, float qx, float qy, float qz, float tc, float perp2, float r2)
 {
     int32_t k = (int32_t)key;
     float x = (float)((int32_t)((uint32_t)k << 24) >> 24), y = (float)((int32_t)((uint32_t)k << 16) >> 24),
           z = (float)((int32_t)((uint32_t)k << 8) >> 24);
-    return x * d.x + y * d.y + z * d.z;
+    float kd = x * d.x + y * d.y + z * d.z, qk = x * qx + y * qy + z * qz;
+    float side = qk - tc * kd;
+    if (!(side * side < (r2 - perp2) * (kd * kd)))
+        return side;
+    return (kd < 0.0f && qk > 0.0f) || (kd > 0.0f && qk < 0.0f) ? NAN : kd;
 }
 
-/* Whether a splat with key . d = kd belongs to group gi. */
-static inline int in_group(int gi, float kd) { return gi == G_FRONT ? !(kd > 0.0f) : !(kd < 0.0f); }
+/* Whether a splat with key_side kd belongs to group gi (0: both, NaN:
+ * neither). */
+static inline int in_group(int gi, float kd) { return gi == G_FRONT ? kd <= 0.0f : kd >= 0.0f; }
 
 /* A group's own crossing: the front group's field falls through zero
  * along the ray, the back group's rises through zero. */
@@ -449,13 +471,22 @@ static inline int append_survivors(actives *a, int bits, __m256 qx, __m256 qy, _
     return 1;
 }
 
-/* key . d of 8 packed keys (key_dot, same products in the same order). */
-static inline __m256 key_dot8(__m256i key, __m256 dx, __m256 dy, __m256 dz)
+/* key_side of 8 packed keys (same products in the same order). */
+static inline __m256 key_side8(__m256i key, __m256 dx, __m256 dy, __m256 dz, __m256 qx, __m256 qy, __m256 qz,
+                               __m256 tc, __m256 perp2, __m256 r2)
 {
+    const __m256 zero = _mm256_setzero_ps();
     __m256 x = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(key, 24), 24));
     __m256 y = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(key, 16), 24));
     __m256 z = _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(key, 8), 24));
-    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, dx), _mm256_mul_ps(y, dy)), _mm256_mul_ps(z, dz));
+    __m256 kd = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, dx), _mm256_mul_ps(y, dy)), _mm256_mul_ps(z, dz));
+    __m256 qk = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, qx), _mm256_mul_ps(y, qy)), _mm256_mul_ps(z, qz));
+    __m256 side = _mm256_sub_ps(qk, _mm256_mul_ps(tc, kd));
+    __m256 crosses = _mm256_cmp_ps(_mm256_mul_ps(side, side),
+                                   _mm256_mul_ps(_mm256_sub_ps(r2, perp2), _mm256_mul_ps(kd, kd)), _CMP_LT_OQ);
+    __m256 never = _mm256_or_ps(_mm256_and_ps(_mm256_cmp_ps(kd, zero, _CMP_LT_OQ), _mm256_cmp_ps(qk, zero, _CMP_GT_OQ)),
+                                _mm256_and_ps(_mm256_cmp_ps(kd, zero, _CMP_GT_OQ), _mm256_cmp_ps(qk, zero, _CMP_LT_OQ)));
+    return _mm256_blendv_ps(side, _mm256_blendv_ps(kd, _mm256_set1_ps(NAN), never), crosses);
 }
 #endif
 
@@ -503,7 +534,7 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
         if (s->key) {
             __m256i key = _mm256_loadu_si256((const __m256i *)(const void *)(s->key + i));
             if (!_mm256_testz_si256(key, _mm256_castps_si256(m))) {
-                kd = key_dot8(key, dx, dy, dz);
+                kd = key_side8(key, dx, dy, dz, qx, qy, qz, tc, perp2, r2);
                 any_key = 1;
             }
         }
@@ -542,7 +573,7 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
             if (s->key) {
                 __m256i key = _mm256_maskload_epi32((const int *)(const void *)(s->key + i), lane);
                 if (!_mm256_testz_si256(key, _mm256_castps_si256(m))) {
-                    kd = key_dot8(key, dx, dy, dz);
+                    kd = key_side8(key, dx, dy, dz, qx, qy, qz, tc, perp2, r2);
                     any_key = 1;
                 }
             }
@@ -579,7 +610,7 @@ static int gather_actives(const sg_splat_soa *s, size_t first, size_t count, con
             continue;
         float kd = 0.0f;
         if (s->key && s->key[i]) {
-            kd = key_dot(s->key[i], d);
+            kd = key_side(s->key[i], d, qx, qy, qz, tc, perp2, r2);
             any_key = 1;
         }
         if (!push_active(s, i, qx, qy, qz, tc, perp2, kd, a))
@@ -626,16 +657,20 @@ static int sample_count(const sg_mls_params *mp, float len, float rmin)
 
 /* F, W, N and the dominant splat of group gi's field at x, straight from
  * the leaf arrays (the slow path's field). */
-static float field_group(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, sg_vec3 x, sg_vec3 d,
-                         int gi, float *wsum, sg_vec3 *nsum, uint32_t *argmax)
+static float field_group(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, sg_vec3 x, sg_vec3 o,
+                         sg_vec3 d, int gi, float *wsum, sg_vec3 *nsum, uint32_t *argmax)
 {
     float W = 0, wmax = 0;
     sg_vec3 P = {0, 0, 0}, N = {0, 0, 0};
     uint32_t best = SG_INVALID_ID;
     for (size_t i = first; i < first + count; ++i) {
-        if (s->key && s->key[i] && !in_group(gi, key_dot(s->key[i], d)))
-            continue;
         float dx = x.x - s->px[i], dy = x.y - s->py[i], dz = x.z - s->pz[i];
+        if (s->key && s->key[i]) {
+            float qx = s->px[i] - o.x, qy = s->py[i] - o.y, qz = s->pz[i] - o.z;
+            float tc = qx * d.x + qy * d.y + qz * d.z, perp2 = fmaxf(0.0f, qx * qx + qy * qy + qz * qz - tc * tc);
+            if (!in_group(gi, key_side(s->key[i], d, qx, qy, qz, tc, perp2, s->r[i] * s->r[i])))
+                continue;
+        }
         float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i]);
         if (w <= 0.0f)
             continue;
@@ -676,13 +711,13 @@ static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count
                 continue;
             sg_vec3 N;
             uint32_t id;
-            F[gi] = field_group(s, first, count, mp->kernel, x, ray->dir, gi, &W[gi], &N, &id);
+            F[gi] = field_group(s, first, count, mp->kernel, x, ray->org, ray->dir, gi, &W[gi], &N, &id);
             if (W[gi] < W_EPS || !prev_ok[gi] || !group_crossing(gi, prevF[gi], F[gi]) ||
                 (gi == G_BACK && front_out))
                 continue;
             float th = prevT[gi] + (t - prevT[gi]) * prevF[gi] / (prevF[gi] - F[gi]), Wh;
             sg_vec3 p = sg_v3_madd(ray->org, ray->dir, th);
-            field_group(s, first, count, mp->kernel, p, ray->dir, gi, &Wh, &N, &id);
+            field_group(s, first, count, mp->kernel, p, ray->org, ray->dir, gi, &Wh, &N, &id);
             sg_vec3 n = sg_v3_normalize(N);
             if (Wh > 0.0f && th < best_t && !sg_ray_is_self(ray, th, n)) {
                 best_t = th;
@@ -978,14 +1013,14 @@ static void plane_distance8(const shrink_splats *sp, sg_kernel kernel, const flo
  * sample lies within eps of the local plane. Stops at the first batch of 8
  * samples that decides it. Samples: a jittered GRID x GRID x LAYERS lattice,
  * the jitter from one hash per slice plus a Kronecker (R3) sequence. */
-static int slice_may_hold_surface(const shrink_splats *sp, sg_kernel kernel, const float lo[3], const float ext[3],
-                                  int a, int sl, float eps, uint64_t key)
+static int slice_may_hold_surface(const shrink_splats *const *fields, int nf, sg_kernel kernel, const float lo[3],
+                                  const float ext[3], int a, int sl, float eps, uint64_t key)
 {
     int b = (a + 1) % 3, c = (a + 2) % 3;
     float slice = ext[a] / SHRINK_SLICES;
     float j0 = sg_rng_float(key, (uint64_t)sl, 0, 0), j1 = sg_rng_float(key, (uint64_t)sl, 0, 1),
           j2 = sg_rng_float(key, (uint64_t)sl, 0, 2);
-    float fmin = FLT_MAX, fmax = -FLT_MAX;
+    float fmin[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, fmax[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
     enum { TOTAL = SHRINK_LAYERS * SHRINK_GRID * SHRINK_GRID };
     for (int base = 0; base < TOTAL; base += 8) {
         float x[3][8], f[8];
@@ -1002,15 +1037,19 @@ static int slice_may_hold_surface(const shrink_splats *sp, sg_kernel kernel, con
             x[b][l] = lo[b] + ext[b] / SHRINK_GRID * ((float)ib + u1);
             x[c][l] = lo[c] + ext[c] / SHRINK_GRID * ((float)ic + u2);
         }
-        plane_distance8(sp, kernel, x, f, ok);
-        for (int l = 0; l < 8; ++l) {
-            if (!ok[l])
+        for (int fi = 0; fi < nf; ++fi) {
+            if (!fields[fi]->n)
                 continue;
-            fmin = f[l] < fmin ? f[l] : fmin;
-            fmax = f[l] > fmax ? f[l] : fmax;
+            plane_distance8(fields[fi], kernel, x, f, ok);
+            for (int l = 0; l < 8; ++l) {
+                if (!ok[l])
+                    continue;
+                fmin[fi] = f[l] < fmin[fi] ? f[l] : fmin[fi];
+                fmax[fi] = f[l] > fmax[fi] ? f[l] : fmax[fi];
+            }
+            if (fmin[fi] <= eps && fmax[fi] >= -eps)
+                return 1;
         }
-        if (fmin <= eps && fmax >= -eps)
-            return 1;
     }
     return 0;
 }
@@ -1041,12 +1080,56 @@ int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb 
         sp.inv_r2[k] = 1.0f / (ps->radius[i] * ps->radius[i]);
         mean = sg_v3_add(mean, sg_pointset_normal(ps, i));
     }
+    /* Opposed layers in the cell (some normal more than 90 degrees from
+     * the mean: the two sides of a thin wall, facing walls of a fold)? Their
+     * normals cancel in F, which may then miss the surface of either layer
+     * that the query's groups (mls.c "groups of splats") find: a culled
+     * slice would hide it (measured: rays through a thin closed shell). */
+    int mixed = 0;
+    for (size_t k = 0; k < count && !mixed; ++k)
+        mixed = sp.nx[k] * mean.x + sp.ny[k] * mean.y + sp.nz[k] * mean.z < 0.0f;
     /* Slice across the dominant axis of the mean normal: the surface runs
-     * roughly along the slices' other two axes, so empty slabs show. */
+     * roughly along the slices' other two axes, so empty slabs show. With
+     * opposed layers the mean cancels; their common axis is the one of the
+     * largest sum of |n_a|. */
     int a = 0;
     float am[3] = {fabsf(mean.x), fabsf(mean.y), fabsf(mean.z)};
+    if (mixed) {
+        am[0] = am[1] = am[2] = 0.0f;
+        for (size_t k = 0; k < count; ++k)
+            am[0] += fabsf(sp.nx[k]), am[1] += fabsf(sp.ny[k]), am[2] += fabsf(sp.nz[k]);
+    }
     if (am[1] > am[a]) a = 1;
     if (am[2] > am[a]) a = 2;
+    /* The fields a slice is tested with: F over all splats, and with
+     * opposed layers also F over the splats whose normal has n_a > 0 and
+     * over those with n_a <= 0 (a copy, in cell order); a slice stays when
+     * any of them may hold a surface there (more kept, never less). */
+    shrink_splats part[2] = {{0}, {0}};
+    float *pbuf = NULL;
+    const shrink_splats *fields[3] = {&sp, &part[0], &part[1]};
+    int nf = 1;
+    if (mixed && (pbuf = sg_alloc_array(count, 14 * sizeof(float))) != NULL) {
+        for (int g = 0; g < 2; ++g) {
+            float *base = pbuf + (size_t)g * 7 * count;
+            shrink_splats *q = &part[g];
+            q->px = base; q->py = base + count; q->pz = base + 2 * count;
+            q->nx = base + 3 * count; q->ny = base + 4 * count; q->nz = base + 5 * count;
+            q->inv_r2 = base + 6 * count;
+        }
+        const float *na = a == 0 ? sp.nx : a == 1 ? sp.ny : sp.nz;
+        for (size_t k = 0; k < count; ++k) {
+            shrink_splats *q = &part[na[k] > 0.0f ? 0 : 1];
+            size_t j = q->n++;
+            q->px[j] = sp.px[k]; q->py[j] = sp.py[k]; q->pz[j] = sp.pz[k];
+            q->nx[j] = sp.nx[k]; q->ny[j] = sp.ny[k]; q->nz[j] = sp.nz[k];
+            q->inv_r2[j] = sp.inv_r2[k];
+        }
+        nf = 3;
+    } else if (mixed) {
+        sg_free(buf);
+        return 1; /* cannot test the groups: keep the cell as it is (always correct) */
+    }
     int b = (a + 1) % 3, c = (a + 2) % 3;
     float lo[3] = {cell->lo.x, cell->lo.y, cell->lo.z}, hi[3] = {cell->hi.x, cell->hi.y, cell->hi.z};
     float ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
@@ -1080,22 +1163,24 @@ int sg_mls_shrink_cell(void *user, const uint32_t *prims, size_t count, sg_aabb 
             far_pos += ok[l] && f[l] > 1.5f * diag;
             far_neg += ok[l] && f[l] < -1.5f * diag;
         }
-        if (far_pos == 8 || far_neg == 8) {
+        if (!mixed && (far_pos == 8 || far_neg == 8)) {
             sg_free(buf);
             return 0;
         }
     }
     /* Only the ends can be cut off, so search inwards from both sides. */
     int first = 0, last = SHRINK_SLICES - 1;
-    while (first < SHRINK_SLICES && !slice_may_hold_surface(&sp, ctx->kernel, lo, ext, a, first, eps, key))
+    while (first < SHRINK_SLICES && !slice_may_hold_surface(fields, nf, ctx->kernel, lo, ext, a, first, eps, key))
         ++first;
     if (first == SHRINK_SLICES) {
         sg_free(buf);
+        sg_free(pbuf);
         return 0;
     }
-    while (last > first && !slice_may_hold_surface(&sp, ctx->kernel, lo, ext, a, last, eps, key))
+    while (last > first && !slice_may_hold_surface(fields, nf, ctx->kernel, lo, ext, a, last, eps, key))
         --last;
     sg_free(buf);
+    sg_free(pbuf);
     float slice = ext[a] / SHRINK_SLICES;
     float nlo = first == 0 ? lo[a] : lo[a] + slice * (float)first;
     float nhi = last == SHRINK_SLICES - 1 ? hi[a] : lo[a] + slice * (float)(last + 1);

@@ -830,4 +830,3 @@ int sg_scene_occluded(const sg_scene *sc, const sg_ray *ray, sg_ray_stats *stats
 {
     return traverse(sc, ray, NULL, stats, QUERY_ANY);
 }
-
