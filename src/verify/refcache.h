@@ -8,7 +8,8 @@
  * the mean and its standard error as EXR files under a cache folder named
  * by a key over the scene (every part, plus the contents of its model and
  * envmap files), the camera, the size, spp, seed and depth:
- *     <cache>/<key>.exr, <key>.se.exr, <key>.txt (seconds and paths)
+ *     <cache>/<key>.exr, <key>.se.exr, <key>.txt (seconds, paths and the
+ *     hit counts, sg_ref_counts)
  * Every file is written to a temporary name and renamed; the .txt is
  * written last, so a cache entry without it is ignored.
  * What it does NOT do: progressive refinement of a cached entry.
@@ -27,8 +28,9 @@
 #include "render/camera.h"
 #include "render/world.h"
 
-/* Bump when the path tracer's estimator changes. */
-#define SG_VERIFY_REF_VERSION 1u
+/* Bump when the path tracer's estimator or the surfaces it traces change
+ * (2: issue 12's leak-free surfaces, and the hit counts in the .txt). */
+#define SG_VERIFY_REF_VERSION 2u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */
