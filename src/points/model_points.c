@@ -62,7 +62,9 @@ sg_status sg_model_points_from_mesh(const sg_mesh *mesh, const char *path, const
         for (size_t i = 0; i < ps.count; i++)
             ps.radius[i] *= d->radius_scale;
     } else {
-        sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale};
+        /* normals are set by now: radii from each point's own layer (a thin
+         * wall's other side does not shrink them, radius.h) */
+        sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale, .layers = 1};
         st = sg_points_estimate_radii(&ps, &rd, err);
         if (st != SG_OK)
             goto fail;

@@ -5,6 +5,8 @@
  *   mesh     -> area-weighted samples with smooth (interpolated) normals
  *   cloud    -> its vertices; normals from the file, estimated where absent
  *   then     -> radius = scale x distance to the k-th nearest neighbour
+ *               of its own layer (a thin wall's other side, normals
+ *               opposed, does not count: points/radius.h)
  *               (file radii, when present, are kept and scaled)
  *   albedo   -> the file's colours, else the clay colour below.
  * Every pointset returned passes sg_pointset_validate. Errors name the file.

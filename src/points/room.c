@@ -58,8 +58,11 @@ static void window_wall(builder *b, float x, float sign, float y0, float y1, flo
 sg_status sg_room_mesh(const sg_room_desc *d, sg_mesh *out, sg_error *err)
 {
     float w = d && d->wall != 0.0f ? d->wall : SG_ROOM_WALL;
+    float wx = d && d->window_wall != 0.0f ? d->window_wall : w;
     if (!(w > 0.0f && w <= 1.0f))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "room: wall thickness %g is not in (0, 1]", (double)w);
+    if (!(wx > 0.0f && wx <= 1.0f))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "room: window wall thickness %g is not in (0, 1]", (double)wx);
     sg_mesh m = {0};
     m.positions = sg_alloc_array(4 * MAX_RECTS, 3 * sizeof(float));
     m.normals = sg_alloc_array(4 * MAX_RECTS, 3 * sizeof(float));
@@ -69,7 +72,7 @@ sg_status sg_room_mesh(const sg_room_desc *d, sg_mesh *out, sg_error *err)
         return sg_error_set(err, SG_ERR_NOMEM, "room: out of memory");
     }
     builder b = {.m = &m};
-    const float H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT, O = H + w, yb = -w, yt = T + w;
+    const float H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT, O = H + w, Ox = H + wx, yb = -w, yt = T + w;
     /* inside, normals into the room: axes x (u = y, v = z), y (u = z,
      * v = x), z (u = x, v = y) */
     rect(&b, 1, 0.0f, 1.0f, -H, H, -H, H);  /* floor   */
@@ -79,18 +82,18 @@ sg_status sg_room_mesh(const sg_room_desc *d, sg_mesh *out, sg_error *err)
     rect(&b, 2, -H, 1.0f, -H, H, 0.0f, T);  /* -Z wall */
     rect(&b, 2, H, -1.0f, -H, H, 0.0f, T);  /* +Z wall */
     /* outside, normals out */
-    rect(&b, 1, yb, -1.0f, -O, O, -O, O);
-    rect(&b, 1, yt, 1.0f, -O, O, -O, O);
+    rect(&b, 1, yb, -1.0f, -O, O, -O, Ox);
+    rect(&b, 1, yt, 1.0f, -O, O, -O, Ox);
     rect(&b, 0, -O, -1.0f, yb, yt, -O, O);
-    window_wall(&b, O, 1.0f, yb, yt, -O, O);
-    rect(&b, 2, -O, -1.0f, -O, O, yb, yt);
-    rect(&b, 2, O, 1.0f, -O, O, yb, yt);
-    /* the window's reveals, x in [H, O], normals into the opening */
+    window_wall(&b, Ox, 1.0f, yb, yt, -O, O);
+    rect(&b, 2, -O, -1.0f, -O, Ox, yb, yt);
+    rect(&b, 2, O, 1.0f, -O, Ox, yb, yt);
+    /* the window's reveals, x in [H, Ox], normals into the opening */
     const float wz = SG_ROOM_WINDOW_Z, wy0 = SG_ROOM_WINDOW_Y0, wy1 = SG_ROOM_WINDOW_Y1;
-    rect(&b, 1, wy0, 1.0f, -wz, wz, H, O);   /* sill  */
-    rect(&b, 1, wy1, -1.0f, -wz, wz, H, O);  /* head  */
-    rect(&b, 2, -wz, 1.0f, H, O, wy0, wy1);  /* jambs */
-    rect(&b, 2, wz, -1.0f, H, O, wy0, wy1);
+    rect(&b, 1, wy0, 1.0f, -wz, wz, H, Ox);   /* sill  */
+    rect(&b, 1, wy1, -1.0f, -wz, wz, H, Ox);  /* head  */
+    rect(&b, 2, -wz, 1.0f, H, Ox, wy0, wy1);  /* jambs */
+    rect(&b, 2, wz, -1.0f, H, Ox, wy0, wy1);
     m.vertex_count = b.nv;
     m.triangle_count = b.nt;
     *out = m;

@@ -10,8 +10,10 @@
  * normals exact up to the faces' edges). In the room's own frame:
  *   inside:   x, z in [-2, 2], y in [0, 2.5] (a 4 x 4 room, 2.5 high,
  *             standing on y = 0);
- *   walls:    floor, ceiling and four walls `wall` thick (default 0.2),
- *             outside x, z in [-2 - wall, 2 + wall], y in [-wall, 2.5 + wall];
+ *   walls:    floor, ceiling and four walls `wall` thick (default 0.2; the
+ *             +X wall `window_wall`, default the same), outside x in
+ *             [-2 - wall, 2 + window_wall], z in [-2 - wall, 2 + wall],
+ *             y in [-wall, 2.5 + wall];
  *   window:   a 1.2 x 1.0 opening through the +X wall, z in [-0.6, 0.6],
  *             y in [0.9, 1.9], with its four reveals closing the wall.
  * The default sun of the analytic "sunsky" map (azimuth 30 degrees from +X
@@ -21,6 +23,9 @@
  * Ownership: *out is allocated with sg_alloc_array (free with
  * sg_mesh_free). Errors: SG_ERR_INVALID_ARG (a wall thickness that is not
  * finite and in (0, 1]), SG_ERR_NOMEM. *out is written only on SG_OK.
+ * (A window wall as thick as the room's while the others are thin gives
+ * a room lit exactly as the thick one through the same window: the
+ * stability map's thin_wall case.)
  */
 #ifndef SG_POINTS_ROOM_H
 #define SG_POINTS_ROOM_H
@@ -36,7 +41,10 @@
 #define SG_ROOM_WINDOW_Y1 1.9f
 
 typedef struct sg_room_desc {
-    float wall;  /* wall thickness; default SG_ROOM_WALL */
+    float wall;         /* thickness of floor, ceiling and walls; default
+                           SG_ROOM_WALL                                   */
+    float window_wall;  /* thickness of the +X wall (the window's depth);
+                           default: wall                                  */
 } sg_room_desc;
 
 /* d may be NULL (defaults). */

@@ -28,7 +28,8 @@
  *                     and sky, seen from inside (issue 12)
  *   thin_wall         the same room with walls 0.04 thick (about half a
  *                     splat radius: each wall's two sides within each
- *                     other's support), same view; baseline: room
+ *                     other's support) but for the window wall (0.2, so the
+ *                     same light comes in), same view; baseline: room
  *   folds             a close-up of the drapery of Lucy (../shared/data,
  *                     sampled to 100k points; the bunny where the folder is
  *                     absent), a concave closed scan

@@ -16,15 +16,16 @@ static const float PI = 3.14159265358979f;
 /* The mesh is closed and oriented outwards from the wall material: the
  * divergence theorem's signed volume, sum over triangles of
  * p0 . (p1 x p2) / 6, is the material's volume, outer box minus inner box
- * minus the window's tunnel, and every normal is its triangle's
+ * minus the window's tunnel (walls 0.2, 0.05, and 0.04 with a window wall
+ * 0.2 thick: the stability map's thin_wall), and every normal is its triangle's
  * counter-clockwise one (a flipped face, a missing one or a gap would
  * change the sum by at least that face's share). */
 static void test_room_mesh_closed(void **state)
 {
     (void)state;
-    const float walls[] = {0.2f, 0.05f};
-    for (int k = 0; k < 2; ++k) {
-        sg_room_desc d = {.wall = walls[k]};
+    const float walls[] = {0.2f, 0.05f, 0.04f}, window_walls[] = {0.0f, 0.0f, 0.2f};
+    for (int k = 0; k < 3; ++k) {
+        sg_room_desc d = {.wall = walls[k], .window_wall = window_walls[k]};
         sg_mesh m;
         assert_int_equal(sg_room_mesh(&d, &m, NULL), SG_OK);
         double vol = 0.0;
@@ -40,11 +41,11 @@ static void test_room_mesh_closed(void **state)
             const float *vn = m.normals + 3 * m.triangles[3 * t];
             assert_true(n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2] > 0.0);
         }
-        double w = walls[k], H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT;
-        double expect = 4.0 * (H + w) * (H + w) * (T + 2.0 * w) - 4.0 * H * H * T -
-                        2.0 * SG_ROOM_WINDOW_Z * (SG_ROOM_WINDOW_Y1 - SG_ROOM_WINDOW_Y0) * w;
+        double w = walls[k], wx = window_walls[k] > 0.0f ? window_walls[k] : w, H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT;
+        double expect = (2.0 * H + w + wx) * 2.0 * (H + w) * (T + 2.0 * w) - 4.0 * H * H * T -
+                        2.0 * SG_ROOM_WINDOW_Z * (SG_ROOM_WINDOW_Y1 - SG_ROOM_WINDOW_Y0) * wx;
         if (!(fabs(vol - expect) < 1e-5 * expect))
-            fail_msg("wall %g: signed volume %.9g, expected %.9g", w, vol, expect);
+            fail_msg("wall %g, window wall %g: signed volume %.9g, expected %.9g", w, wx, vol, expect);
         sg_mesh_free(&m);
     }
     sg_room_desc bad = {.wall = -1.0f};
