@@ -158,7 +158,7 @@ if [ -f "$csv" ]; then
       v[3] = $11;                  s[3] = 0.1;   f[3] = "%.3f"   # relMSE
       v[4] = $14 + $15;            s[4] = 1;     f[4] = "%d"     # NaN pixels
       v[5] = ($23 == "" ? "" : ($23 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
-      v[6] = $25 * 100;            s[6] = 1;     f[6] = "%.2f"   # back hits, % of the reference's hits
+      v[6] = $25 * 100;            s[6] = 1;     f[6] = "%.2f"   # back hits, % of the reference hits
       for (k = 0; k < 7; k++) {
         x = 2 * k + m
         if (!ok) { c = 1; lab = $3 }

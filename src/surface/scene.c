@@ -615,8 +615,9 @@ done:
  * disk overhanging a silhouette or a thin part's rim faces away from a ray
  * that never entered the model: the camera would see the model's inside
  * there (bench_leaks: 1.3% of the camera hits on Lucy, 143 in 32k paths).
- * So when the nearest disk faces away, the disks of its leaf that face the
- * ray and lie within two radii of the hit point are asked where it lies:
+ * So when the nearest disk faces away, the disks that face the ray and lie
+ * within two radii of the hit point (in the leaves around it) are asked
+ * where it lies:
  * in front of any of their planes, the point is outside the model, and the
  * ray is traced again accepting front faces only. (Within one radius
  * missed the rims where the nearest facing disks sit 1 to 2 radii away.) With none there (the inside of a
@@ -630,12 +631,36 @@ static int nearest(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_st
         !(sg_v3_dot(hit->n, ray->dir) > 0.0f) || hit->leaf >= sc->tree.leaf_count)
         return found;
     const sg_splat_soa *s = &sc->soa;
-    int outside = 0;
-    for (size_t k = sc->tree.leaf_first[hit->leaf]; k < sc->tree.leaf_first[hit->leaf + 1] && !outside; ++k) {
-        float ex = hit->p.x - s->px[k], ey = hit->p.y - s->py[k], ez = hit->p.z - s->pz[k];
-        outside = s->nx[k] * ray->dir.x + s->ny[k] * ray->dir.y + s->nz[k] * ray->dir.z < 0.0f &&
-                  ex * ex + ey * ey + ez * ez < 4.0f * s->r[k] * s->r[k] &&
-                  ex * s->nx[k] + ey * s->ny[k] + ez * s->nz[k] > 0.0f;
+    /* Ask the disks in every leaf whose cell meets the box of half-side 2r
+     * around the hit point (a disk flat in a plane is referenced only by
+     * the leaves its thin box meets: those of a convex edge's other face
+     * are often not the hit's leaf). Fixed-size stack, at most MAX_ASKED
+     * leaves (a cap, never reached at scene scale). */
+    enum { MAX_ASKED = 64 };
+    float rr = hit->splat < sc->points.count ? 2.0f * sc->points.radius[hit->splat] : 0.0f;
+    const float lo[3] = {hit->p.x - rr, hit->p.y - rr, hit->p.z - rr}, hi[3] = {hit->p.x + rr, hit->p.y + rr, hit->p.z + rr};
+    uint32_t stack[STACK_SIZE];
+    int sp = 0, asked = 0, outside = 0;
+    stack[sp++] = 0;
+    while (sp > 0 && !outside && asked < MAX_ASKED) {
+        sg_kd_node n = sc->tree.nodes[stack[--sp]];
+        if (!sg_kd_node_is_leaf(n)) {
+            int a = sg_kd_node_axis(n);
+            uint32_t child = sg_kd_node_index(n);
+            if (lo[a] < n.split && sp < STACK_SIZE)
+                stack[sp++] = child;
+            if (hi[a] >= n.split && sp < STACK_SIZE)
+                stack[sp++] = child + 1;
+            continue;
+        }
+        uint32_t l = sg_kd_node_index(n);
+        ++asked;
+        for (size_t k = sc->tree.leaf_first[l]; k < sc->tree.leaf_first[l + 1] && !outside; ++k) {
+            float ex = hit->p.x - s->px[k], ey = hit->p.y - s->py[k], ez = hit->p.z - s->pz[k];
+            outside = s->nx[k] * ray->dir.x + s->ny[k] * ray->dir.y + s->nz[k] * ray->dir.z < 0.0f &&
+                      ex * ex + ey * ey + ez * ez < 4.0f * s->r[k] * s->r[k] &&
+                      ex * s->nx[k] + ey * s->ny[k] + ez * s->nz[k] > 0.0f;
+        }
     }
     if (!outside)
         return found;
