@@ -60,13 +60,21 @@ static int same_position(const dup_point *a, const dup_point *b)
  * own): counted, they shrink the radius below the spacing of the splat's
  * own layer, which then has holes that let rays through the wall (the
  * stability map's thin_wall room: walls 0.77 r thick, where r would be
- * the kNN radius without this, kept gaps 1.6 spacings wide). So where the
- * k nearest include an opposed normal, d2k is the k-th distance among the
- * points whose normals lie within 90 degrees of the splat's own (from the
+ * the kNN radius without this, kept gaps 1.6 spacings wide). So where at
+ * least a third of the k nearest have opposed normals, more than 120
+ * degrees from its own, and at least a third do not (on a wall about
+ * half do, at 180 degrees; noisy normals n + 0.4 N(0, I) must not count:
+ * with 90 degrees, one opposed neighbour enough, and outliers, whose
+ * neighbours all look opposed, included, their radii grew uneven and the
+ * noisy sphere's flipped pixels rose from 0.15% to 1.2%), d2k is the k-th
+ * distance among the
+ * points whose normals lie within 120 degrees of the splat's own (from the
  * 3k nearest; when fewer than k of them are there, the 3k-th distance).
  * Points without a normal, and the k nearest of every other point, are as
  * before: on smooth surfaces nothing changes. Only raises d2k. */
 enum { LAYER_QUERY = 3, MAX_K = 64 };
+/* Normals more than 120 degrees apart belong to opposed layers. */
+static const float OPPOSED_COS = -0.5f;
 static sg_status same_layer_distances(const sg_pointset *ps, const sg_knn *tree, size_t k, float *d2k,
                                       sg_error *err)
 {
@@ -89,16 +97,18 @@ static sg_status same_layer_distances(const sg_pointset *ps, const sg_knn *tree,
         const float ni[3] = {ps->nx[i], ps->ny[i], ps->nz[i]};
         if (ni[0] == 0.0f && ni[1] == 0.0f && ni[2] == 0.0f)
             continue;
-        size_t found = sg_knn_query(tree, p, k, i, idx, d2);
-        int opposed = 0;
-        for (size_t j = 0; j < found && !opposed; ++j)
-            opposed = ps->nx[idx[j]] * ni[0] + ps->ny[idx[j]] * ni[1] + ps->nz[idx[j]] * ni[2] < 0.0f;
-        if (!opposed)
+        size_t found = sg_knn_query(tree, p, k, i, idx, d2), opposed = 0;
+        for (size_t j = 0; j < found; ++j)
+            opposed += ps->nx[idx[j]] * ni[0] + ps->ny[idx[j]] * ni[1] + ps->nz[idx[j]] * ni[2] < OPPOSED_COS;
+        /* A wall: both sides among the k nearest. A point whose own
+         * normal is an outlier sees nearly all its neighbours "opposed"
+         * and is not one (its layer would be itself alone). */
+        if (3 * opposed < k || 3 * (found - opposed) < k)
             continue;
         found = sg_knn_query(tree, p, LAYER_QUERY * k, i, idx, d2);
         float r2 = found ? d2[found - 1] : d2k[i];
         for (size_t j = 0, same = 0; j < found; ++j)
-            if (ps->nx[idx[j]] * ni[0] + ps->ny[idx[j]] * ni[1] + ps->nz[idx[j]] * ni[2] >= 0.0f && ++same == k) {
+            if (ps->nx[idx[j]] * ni[0] + ps->ny[idx[j]] * ni[1] + ps->nz[idx[j]] * ni[2] >= OPPOSED_COS && ++same == k) {
                 r2 = d2[j];
                 break;
             }

@@ -3,9 +3,9 @@
  * What it does: sets radius[i] = scale * (distance from point i to its k-th
  * nearest other point), the usual spacing estimate for splats (k = 8 gives
  * disks that overlap their ring of neighbours on a surface sampled evenly).
- * With desc.layers, where the k nearest of point i include one whose
- * normal is more than 90 degrees from its own (the other side of a
- * thin wall or part), only the points of its own layer (normals within 90
+ * With desc.layers, where a third or more of the k nearest of point i
+ * have a normal more than 120 degrees from its own (the other side of a
+ * thin wall or part), only the points of its own layer (normals within 120
  * degrees) count: otherwise the other side halves the estimate and each
  * side is left with holes (issue 12). Elsewhere the rule is unchanged.
  *
