@@ -211,15 +211,37 @@ static sg_status bunny_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_error
 
 /* The built-in room (points/room.h) with walls `wall` thick, sampled to
  * count points like a mesh; the mesh is the truth. */
+static double mesh_area(const sg_mesh *m)
+{
+    double a = 0.0;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const float *p0 = m->positions + 3 * m->triangles[3 * t], *p1 = m->positions + 3 * m->triangles[3 * t + 1],
+                    *p2 = m->positions + 3 * m->triangles[3 * t + 2];
+        sg_vec3 e1 = sg_v3(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+        sg_vec3 e2 = sg_v3(p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]);
+        a += 0.5 * sg_v3_length(sg_v3_cross(e1, e2));
+    }
+    return a;
+}
+
 static sg_status room_cloud(cloud *c, size_t count, float wall, sg_mesh *mesh_out, sg_error *err)
 {
     /* The window wall keeps the room's thickness: the same opening lets the
-     * same light in, so the thin room's light differs only by leaks. */
-    sg_room_desc rd = {.wall = wall, .window_wall = SG_ROOM_WALL};
-    sg_mesh m = {0};
+     * same light in, so the thin room's light differs only by leaks. And
+     * the same density of points as the room's (count is the thick room's):
+     * MLS rounds the window's edges by a fraction of a radius, and a few
+     * percent of the window's area is as much light. */
+    sg_room_desc rd = {.wall = wall, .window_wall = SG_ROOM_WALL}, thick = {0};
+    sg_mesh m = {0}, t = {0};
     sg_status st = sg_room_mesh(&rd, &m, err);
-    if (st != SG_OK)
+    if (st == SG_OK)
+        st = sg_room_mesh(&thick, &t, err);
+    if (st != SG_OK) {
+        sg_mesh_free(&m);
         return st;
+    }
+    count = (size_t)llround((double)count * mesh_area(&m) / mesh_area(&t));
+    sg_mesh_free(&t);
     sg_model_points_desc d = {.points = count, .seed = 13};
     sg_pointset ps = {0};
     st = sg_model_points_from_mesh(&m, "room", &d, &ps, err);
