@@ -191,7 +191,7 @@ fi
 csv="$dir/stability.csv"
 if [ -f "$csv" ]; then
   # Columns of stability.csv: 1 case, 2 model, 3 status, 7 hole_rate, 9 normal_err_deg, 11 bake_rel_mse,
-  # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 23 ref_energy_vs_clean.
+  # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 23 ref_energy_vs_clean, 25 back_hit_rate.
   # Cells: x = metric x model, y = case; colour = badness in [0, 1] on each metric's own scale.
   awk -F, '
     BEGIN { n = 0 }
@@ -205,7 +205,8 @@ if [ -f "$csv" ]; then
       v[3] = $11;                  s[3] = 0.1;   f[3] = "%.3f"   # relMSE
       v[4] = $14 + $15;            s[4] = 1;     f[4] = "%d"     # NaN pixels
       v[5] = ($23 == "" ? "" : ($23 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
-      for (k = 0; k < 6; k++) {
+      v[6] = $25 * 100;            s[6] = 1;     f[6] = "%.2f"   # back hits, % of the reference hits
+      for (k = 0; k < 7; k++) {
         x = 2 * k + m
         if (!ok) { c = 1; lab = $3 }
         else if (v[k] == "") { c = -1; lab = "-" }
@@ -214,21 +215,23 @@ if [ -f "$csv" ]; then
       }
     }
     END {
-      for (y = 0; y < n; y++) for (x = 0; x < 12; x++) print x, n - 1 - y, cell[x, y], text[x, y] > "'"$tmpd"'/st"
+      for (y = 0; y < n; y++) for (x = 0; x < 14; x++) print x, n - 1 - y, cell[x, y], text[x, y] > "'"$tmpd"'/st"
       for (y = 0; y < n; y++) print n - 1 - y, name[y] > "'"$tmpd"'/st_names"
       print n > "'"$tmpd"'/st_n"
     }' "$csv"
   n="$(cat "$tmpd/st_n")"
   ytics="$(awk '{ printf "%s\"%s\" %d", (NR > 1 ? ", " : ""), $2, $1 }' "$tmpd/st_names")"
   plot "$dir/verify_stability.png" <<GP
-set terminal $(term 1500 $((140 + 34 * n)))
+set terminal $(term 1700 $((140 + 34 * n)))
 set title "Stability map: case x method (colour: 0 = fine, red = at or beyond the column's scale; grey: n/a)"
-set xrange [-0.5:11.5]
+set xrange [-0.5:13.5]
 set yrange [-0.5:$n - 0.5]
 set xtics ("holes %%\nMLS" 0, "holes %%\ndisks" 1, "normal err deg\nMLS" 2, "normal err deg\ndisks" 3, \
   "bake energy %%\nMLS" 4, "bake energy %%\ndisks" 5, "bake relMSE\nMLS" 6, "bake relMSE\ndisks" 7, \
-  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref vs clean %%\nMLS" 10, "ref vs clean %%\ndisks" 11) font ",8"
-set x2tics ("scale 10" 0.5, "scale 30" 2.5, "scale 20" 4.5, "scale 0.1" 6.5, "scale 1" 8.5, "scale 10" 10.5) font ",8"
+  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref vs clean %%\nMLS" 10, "ref vs clean %%\ndisks" 11, \
+  "back hits %%\nMLS" 12, "back hits %%\ndisks" 13) font ",8"
+set x2tics ("scale 10" 0.5, "scale 30" 2.5, "scale 20" 4.5, "scale 0.1" 6.5, "scale 1" 8.5, "scale 10" 10.5, \
+  "scale 1" 12.5) font ",8"
 set ytics ($ytics) font ",9" noenhanced
 set cbrange [-1:1]
 set palette defined (-1 "#dddddd", -0.001 "#dddddd", 0 "#ffffff", 0.3 "#ffe9a8", 0.7 "#f59b5b", 1 "#c8102e")

@@ -90,6 +90,12 @@ static int write_summary(const char *path, const char *scene, const sg_ref_desc 
     cJSON_AddNumberToObject(o, "paths", (double)r->paths);
     cJSON_AddNumberToObject(o, "rays", (double)r->rays.rays);
     cJSON_AddNumberToObject(o, "mrays_per_s", r->seconds > 0 ? (double)r->rays.rays / r->seconds / 1e6 : 0.0);
+    /* Hits from behind (ref/pathtrace.h sg_ref_counts): on closed models
+     * seen from outside each one follows a ray through a surface. */
+    cJSON_AddNumberToObject(o, "surface_hits", (double)r->counts.surface_hits);
+    cJSON_AddNumberToObject(o, "back_hits", (double)r->counts.back_hits);
+    cJSON_AddNumberToObject(o, "camera_back_hits", (double)r->counts.camera_back_hits);
+    cJSON_AddNumberToObject(o, "paths_with_back_hits", (double)r->counts.back_paths);
     char *text = cJSON_Print(o);
     cJSON_Delete(o);
     if (!text)

@@ -492,8 +492,9 @@ static sg_status parse_model(const ctx *c, const cJSON *obj, const char *jp, sg_
 {
     static const char *const keys[] = {"path", "builtin", "points", "radius_k", "radius_scale", "radius_cap",
                                        "drop_outliers", "transform", "material", "surface"};
-    static const char *const builtins[] = {"bunny", "ground", "sphere"};
-    static const int builtin_values[] = {SG_SCENE_MODEL_BUNNY, SG_SCENE_MODEL_GROUND, SG_SCENE_MODEL_SPHERE};
+    static const char *const builtins[] = {"bunny", "ground", "sphere", "room"};
+    static const int builtin_values[] = {SG_SCENE_MODEL_BUNNY, SG_SCENE_MODEL_GROUND, SG_SCENE_MODEL_SPHERE,
+                                         SG_SCENE_MODEL_ROOM};
     static const range RADIUS_SCALE = {0.0, 100.0, 1, 0};
     static const range RADIUS_CAP = {0.0, 1e6, 0, 0};
 

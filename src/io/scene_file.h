@@ -21,6 +21,9 @@
  *                                relative paths resolve against
  *                                the scene file's folder     (exactly one of
  *         "builtin": "bunny",    "bunny" | "ground" | "sphere" path, builtin)
+ *                                | "room" (points/room.h: a closed 4 x 4 x
+ *                                2.5 room, walls 0.2 thick, one window in
+ *                                the +X wall; sampled like a mesh)
  *         "points": 250000,      mesh samples, integer [1, 1e9]; absent = 0 =
  *                                the loader's default (250000 for meshes);
  *                                "ground": a jittered grid of round(sqrt(
@@ -118,7 +121,8 @@ typedef enum sg_scene_model_kind {
     SG_SCENE_MODEL_FILE = 0,   /* "path": a .ply or .obj file            */
     SG_SCENE_MODEL_BUNNY = 1,  /* "builtin": "bunny" (assets/bunny.ply)   */
     SG_SCENE_MODEL_GROUND = 2, /* "builtin": "ground"                     */
-    SG_SCENE_MODEL_SPHERE = 3  /* "builtin": "sphere"                     */
+    SG_SCENE_MODEL_SPHERE = 3, /* "builtin": "sphere"                     */
+    SG_SCENE_MODEL_ROOM = 4    /* "builtin": "room" (points/room.h)       */
 } sg_scene_model_kind;
 
 typedef enum sg_scene_env_kind {

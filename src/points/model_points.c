@@ -60,8 +60,10 @@ static sg_status estimate_radii(sg_pointset *ps, const sg_model_points_desc *d, 
     unsigned char *mark = NULL;
     if (d->drop_outliers && !(mark = sg_alloc_array(ps->count, 1)))
         return sg_error_set(err, SG_ERR_NOMEM, "out of memory for %zu outlier marks", ps->count);
-    sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale, .cap = d->radius_cap, .stats = &rs,
-                         .capped = mark};
+    /* Normals are set by now: radii from each point's own layer, so a thin
+     * wall's other side does not shrink them (radius.h). */
+    sg_radius_desc rd = {.k = d->radius_k, .scale = d->radius_scale, .cap = d->radius_cap, .layers = 1,
+                         .stats = &rs, .capped = mark};
     sg_status st = sg_points_estimate_radii(ps, &rd, err);
     if (st == SG_OK && mark && rs.capped > 0) {
         if (rs.capped > ps->count - 2) {

@@ -4,9 +4,11 @@
  * built-in bunny):
  *   mesh     -> area-weighted samples with smooth (interpolated) normals
  *   cloud    -> its vertices; normals from the file, estimated where absent
- *   then     -> radius = scale x distance to the k-th nearest neighbour,
- *               capped at radius_cap x the median (stray points, radius.h);
- *               with drop_outliers the capped points are removed and the
+ *   then     -> radius = scale x distance to the k-th nearest neighbour
+ *               of its own layer (a thin wall's other side, normals
+ *               opposed, does not count: points/radius.h), capped at
+ *               radius_cap x the median (stray points, radius.h); with
+ *               drop_outliers the capped points are removed and the
  *               radii of the rest estimated again (file radii, when
  *               present, are kept and scaled)
  *   colour   -> the file's colours, else white (1, 1, 1): a material's

@@ -3,6 +3,11 @@
  * What it does: sets radius[i] = scale * (distance from point i to its k-th
  * nearest other point), the usual spacing estimate for splats (k = 8 gives
  * disks that overlap their ring of neighbours on a surface sampled evenly).
+ * With desc.layers, where a third or more of the k nearest of point i
+ * have a normal more than 120 degrees from its own (the other side of a
+ * thin wall or part), only the points of its own layer (normals within 120
+ * degrees) count: otherwise the other side halves the estimate and each
+ * side is left with holes (issue 12). Elsewhere the rule is unchanged.
  *
  * Duplicates: a point with at least k coincident copies has a k-th
  * neighbour distance of 0. Such a cluster is treated as one sample: each of
@@ -29,7 +34,8 @@
  * Errors: SG_ERR_INVALID_ARG (non-finite position naming the point, a
  * single point, all points coincident, scale not finite and > 0, a shared
  * tree of the wrong size), SG_ERR_NOMEM. Positions, normals and albedo are
- * not touched; radius is written only on SG_OK. Parallel (OpenMP), same
+ * not touched (normals are read only with desc.layers); radius is written
+ * only on SG_OK. Parallel (OpenMP), same
  * result for any thread count.
  */
 #ifndef SG_POINTS_RADIUS_H
@@ -51,6 +57,11 @@ typedef struct sg_radius_stats {
 typedef struct sg_radius_desc {
     unsigned k;        /* neighbour rank; 0 = 8                               */
     float scale;       /* multiplier of the k-th distance; 0 = 1.0            */
+    int layers;        /* 1: the pointset's normals are set (unit, or 0 for
+                          unknown) and a point's k-th neighbour is sought in
+                          its own layer where an opposed normal is among its
+                          k nearest (header note); 0 (default): normals are
+                          not read                                        */
     const sg_knn *knn; /* optional, shared for the call: a tree built over
                           exactly this pointset's positions; NULL = build one */
     float cap;         /* radii above cap x the median are capped; 0 =

@@ -49,6 +49,13 @@ static float max3(sg_vec3 v) { return fmaxf(v.x, fmaxf(v.y, v.z)); }
 
 sg_vec3 sg_ref_path(const sg_world *w, const sg_ref_desc *d, float x, float y, uint64_t path, sg_ray_stats *st)
 {
+    return sg_ref_path_counted(w, d, x, y, path, st, NULL);
+}
+
+sg_vec3 sg_ref_path_counted(const sg_world *w, const sg_ref_desc *d, float x, float y, uint64_t path,
+                            sg_ray_stats *st, sg_ref_counts *counts)
+{
+    sg_ref_counts c = {0}; /* this path's hits (pathtrace.h) */
     const sg_envmap *env = sg_world_envmap(w);
     sg_ray ray = sg_camera_ray(&d->camera, x, y, d->width, d->height);
     sg_vec3 L = {0, 0, 0}, beta = {1, 1, 1};
@@ -60,6 +67,11 @@ sg_vec3 sg_ref_path(const sg_world *w, const sg_ref_desc *d, float x, float y, u
             float wgt = depth == 0 ? 1.0f : power_heuristic(prev_pdf_b, sg_envmap_pdf(env, ray.dir));
             L = sg_v3_add(L, sg_v3_scale(sg_v3_mul(beta, Le), wgt));
             break;
+        }
+        c.surface_hits++;
+        if ((depth == 0 || (ray.flags & SG_RAY_FRONT_ONLY)) && sg_v3_dot(ray.dir, h.hit.n) > 0.0f) {
+            c.back_hits++;
+            c.camera_back_hits += depth == 0;
         }
         const sg_material *m = sg_world_material(w, h.model);
         sg_vec3 albedo = sg_world_albedo(w, &h);
@@ -113,6 +125,10 @@ sg_vec3 sg_ref_path(const sg_world *w, const sg_ref_desc *d, float x, float y, u
         assert(sg_v3_isfinite(beta) && beta.x >= 0.0f && beta.y >= 0.0f && beta.z >= 0.0f); /* invariant 1 */
         ray = sg_world_spawn_ray(w, &h, wi, INFINITY);
     }
+    if (counts) {
+        c.back_paths = c.back_hits > 0;
+        sg_ref_counts_add(counts, &c);
+    }
     return L;
 }
 
@@ -136,7 +152,10 @@ sg_status sg_ref_render(const sg_world *w, const sg_ref_desc *desc, sg_ref_resul
     }
     int tiles_x = (d.width + TILE - 1) / TILE, tiles_y = (d.height + TILE - 1) / TILE, tiles = tiles_x * tiles_y;
     sg_ray_stats *tile_stats = sg_calloc_array((size_t)tiles, sizeof *tile_stats);
-    if (!tile_stats) {
+    sg_ref_counts *tile_counts = sg_calloc_array((size_t)tiles, sizeof *tile_counts);
+    if (!tile_stats || !tile_counts) {
+        sg_free(tile_stats);
+        sg_free(tile_counts);
         sg_ref_result_free(&r);
         return sg_error_set(err, SG_ERR_NOMEM, "reference: out of memory");
     }
@@ -153,7 +172,8 @@ sg_status sg_ref_render(const sg_world *w, const sg_ref_desc *desc, sg_ref_resul
                     uint64_t path = pixel * SG_REF_MAX_SPP + d.first_sample + (uint64_t)s;
                     float jx = d.pixel_centres ? 0.5f : sg_rng_float(d.seed, path, 0, 0),
                           jy = d.pixel_centres ? 0.5f : sg_rng_float(d.seed, path, 0, 1);
-                    sg_vec3 L = sg_ref_path(w, &d, (float)x + jx, (float)y + jy, path, &tile_stats[t]);
+                    sg_vec3 L = sg_ref_path_counted(w, &d, (float)x + jx, (float)y + jy, path, &tile_stats[t],
+                                                    &tile_counts[t]);
                     double v[3] = {L.x, L.y, L.z};
                     for (int c = 0; c < 3; ++c) {
                         sum[c] += v[c];
@@ -171,9 +191,12 @@ sg_status sg_ref_render(const sg_world *w, const sg_ref_desc *desc, sg_ref_resul
             }
     }
     r.seconds = omp_get_wtime() - t0;
-    for (int t = 0; t < tiles; ++t)
+    for (int t = 0; t < tiles; ++t) {
         sg_ray_stats_add(&r.rays, &tile_stats[t]);
+        sg_ref_counts_add(&r.counts, &tile_counts[t]);
+    }
     sg_free(tile_stats);
+    sg_free(tile_counts);
     size_t npix = (size_t)d.width * (size_t)d.height;
     for (size_t i = 0; i < npix; ++i)
         for (int c = 0; c < 3; ++c)
@@ -219,5 +242,6 @@ sg_status sg_ref_result_merge(sg_ref_result *a, int na, const sg_ref_result *b, 
     a->seconds += b->seconds;
     a->paths += b->paths;
     sg_ray_stats_add(&a->rays, &b->rays);
+    sg_ref_counts_add(&a->counts, &b->counts);
     return SG_OK;
 }

@@ -54,6 +54,33 @@ typedef struct sg_ref_desc {
                              pixel's average)                              */
 } sg_ref_desc;
 
+/* Hits from behind (issue 12). A path vertex is a "back hit" when its ray
+ * meets the surface from behind, dot(dir, n) > 0, although the ray expected
+ * a front face: a camera ray (the camera is taken to be outside every
+ * model) or a ray that left its vertex towards the side the surface's
+ * normal points to (SG_RAY_FRONT_ONLY: every bounce of a path that arrived
+ * from the front). On closed models seen from outside every back hit
+ * follows a ray that went through a surface, and the path then goes on as
+ * if inside the model; a camera inside a closed model (the stability
+ * map's camera_inside) makes every camera hit a back hit. Rays leaving a
+ * surface inwards (SG_RAY_BACK_ONLY: the path is inside by its own
+ * account) expect back faces and are not counted. Shadow rays make no
+ * vertices and are not counted either. */
+typedef struct sg_ref_counts {
+    uint64_t surface_hits;      /* path vertices: camera and bounce rays that hit */
+    uint64_t back_hits;         /* of them, back hits (above)                */
+    uint64_t camera_back_hits;  /* of the back hits, by camera rays          */
+    uint64_t back_paths;        /* paths with at least one back hit          */
+} sg_ref_counts;
+
+static inline void sg_ref_counts_add(sg_ref_counts *a, const sg_ref_counts *b)
+{
+    a->surface_hits += b->surface_hits;
+    a->back_hits += b->back_hits;
+    a->camera_back_hits += b->camera_back_hits;
+    a->back_paths += b->back_paths;
+}
+
 typedef struct sg_ref_result {
     sg_image mean;        /* per-pixel mean radiance                       */
     sg_image std_error;   /* per-pixel standard error of the mean          */
@@ -61,6 +88,7 @@ typedef struct sg_ref_result {
     double seconds;       /* wall time                                     */
     uint64_t paths;       /* paths traced                                  */
     sg_ray_stats rays;    /* every ray: camera, shadow and bounce          */
+    sg_ref_counts counts; /* surface hits, and those met from behind       */
 } sg_ref_result;
 
 /* Renders; on failure *out is untouched. */
@@ -78,5 +106,9 @@ sg_status sg_ref_result_merge(sg_ref_result *a, int na, const sg_ref_result *b, 
 /* One path's radiance through image point (x, y) in pixels, path index
  * `path` (exposed for tests of the estimator). */
 sg_vec3 sg_ref_path(const sg_world *w, const sg_ref_desc *d, float x, float y, uint64_t path, sg_ray_stats *st);
+
+/* The same path, adding its hits to *counts (may be NULL). */
+sg_vec3 sg_ref_path_counted(const sg_world *w, const sg_ref_desc *d, float x, float y, uint64_t path,
+                            sg_ray_stats *st, sg_ref_counts *counts);
 
 #endif

@@ -16,7 +16,9 @@
 
 #include "core/alloc.h"
 #include "envmap/analytic.h"
+#include "points/model_points.h"
 #include "points/primitives.h"
+#include "points/room.h"
 #include "render/default_scene.h"
 
 struct sg_world {
@@ -61,6 +63,14 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
         sg_sphere_points_desc d = {.count = m->points.points, .radius_k = m->points.radius_k,
                                    .radius_scale = m->points.radius_scale, .albedo = {1, 1, 1}};
         st = sg_points_make_sphere(&d, out, err);
+        break;
+    }
+    case SG_SCENE_MODEL_ROOM: {
+        /* Sampled like any mesh: area-weighted, exact face normals. */
+        sg_mesh mesh = {0};
+        if ((st = sg_room_mesh(NULL, &mesh, err)) == SG_OK)
+            st = sg_model_points_from_mesh(&mesh, "builtin room", &m->points, out, err);
+        sg_mesh_free(&mesh);
         break;
     }
     default:

@@ -11,8 +11,10 @@
  * Builtin models: "bunny" (assets/bunny.ply sampled like any mesh: about
  * 10 units tall, standing on y = 0), "ground" (a 30 x 30 square of splats at
  * y = 0, normal +Y), "sphere" (unit sphere, outward normals, 100k points or
- * the model's "points"); each then goes through its transform. None of
- * them has colours (white splats): the material's albedo is theirs.
+ * the model's "points"), "room" (points/room.h: a closed room with one
+ * window, 4 x 4 x 2.5 inside, walls 0.2 thick, sampled like a mesh to the
+ * model's "points", default 250k); each then goes through its transform.
+ * None of them has colours (white splats): the material's albedo is theirs.
  *
  * Ownership: the world copies what it needs; the scene file may be freed
  * after sg_world_create. Queries are thread-safe; stats must be per thread.

@@ -9,6 +9,13 @@
  *   SG_SURFACE_DISK  flat disk splats; the hits within a small depth window
  *                    around the nearest one are blended (Kashyap 2010, §3.5
  *                    "deep blending") for position and normal.
+ * No leaks (issue 12): a hit's normal faces the ray the way its crossing
+ * says (entry: dot(dir, n) < 0, exit: > 0); near folds and thin walls the
+ * MLS field is taken per group of splats facing the ray the same way, so
+ * a wall thinner than a splat radius stops rays from either side
+ * (mls.h); a ray that accepts either face (a camera ray) meets a surface
+ * from behind only from inside the model (mls.c front_out; for disks,
+ * nearest() in scene.c). Measured in docs/surfaces.md (bench_leaks).
  * What it does not do: shading, materials, instancing, dynamic updates.
  *
  * Use:
@@ -75,6 +82,8 @@ typedef struct sg_scene_info {
     size_t leaf_count;      /* leaves, empty ones included                 */
     size_t empty_leaf_count;
     size_t splat_refs;      /* splat references over all leaves            */
+    size_t keyed_count;     /* MLS: splats with a layer key (an opposed
+                               layer within reach: thin walls, folds)     */
     size_t memory_bytes;    /* everything the scene holds                  */
     int depth;              /* deepest leaf                                */
     double build_seconds;   /* wall time of sg_scene_create                */

@@ -14,6 +14,11 @@ typedef struct sg_splat_soa {
     float *r;            /* radius of support                       */
     float *inv_r;        /* 1 / r, precomputed                      */
     uint32_t *id;        /* index of the splat in the scene's pointset */
+    uint32_t *key;       /* MLS: the splat's layer key (scene.c): its
+                            layer normal as three int8 in bits 0-7,
+                            8-15, 16-23 where an opposed layer is near,
+                            else 0; it puts the splat in a group for a
+                            ray (mls.c). NULL: no keys (disks)      */
 } sg_splat_soa;
 
 #endif

@@ -22,11 +22,13 @@
 #include "math/rng.h"
 #include "points/model_points.h"
 #include "points/primitives.h"
+#include "points/room.h"
 #include "verify/verify_int.h"
 
 enum {
     C_SPHERE_CLEAN, C_BUNNY_CLEAN, C_COARSE_2K, C_RADII_SMALL, C_NOISY_NORMALS, C_MISSING_NORMALS, C_SHARP_CUBE,
-    C_THIN_SHEET, C_GRAZING, C_INSIDE, C_SCALE_SMALL, C_SCALE_LARGE, C_DUPLICATES, C_TINY_SUN, C_COUNT
+    C_THIN_SHEET, C_GRAZING, C_INSIDE, C_SCALE_SMALL, C_SCALE_LARGE, C_DUPLICATES, C_TINY_SUN, C_ROOM, C_THIN_WALL,
+    C_FOLDS, C_COUNT
 };
 
 static const struct {
@@ -47,6 +49,9 @@ static const struct {
     {"scale_1e4", "sphere scaled by 1e4, camera too", C_SPHERE_CLEAN},
     {"duplicates", "sphere, every point three times", C_SPHERE_CLEAN},
     {"tiny_sun", "sphere on a plane, sun 0.1 deg, 2.5e6", -1},
+    {"room", "closed room, one window, sun and sky, camera inside", -1},
+    {"thin_wall", "the room with walls 0.04 thick (~r/2) but the window's, same view", C_ROOM},
+    {"folds", "close-up of Lucy's folds (a concave scan)", -1},
 };
 
 int sg_verify_case_count(void) { return C_COUNT; }
@@ -204,6 +209,92 @@ static sg_status bunny_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_error
     return st;
 }
 
+/* The built-in room (points/room.h) with walls `wall` thick, sampled to
+ * count points like a mesh; the mesh is the truth. */
+static double mesh_area(const sg_mesh *m)
+{
+    double a = 0.0;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const float *p0 = m->positions + 3 * m->triangles[3 * t], *p1 = m->positions + 3 * m->triangles[3 * t + 1],
+                    *p2 = m->positions + 3 * m->triangles[3 * t + 2];
+        sg_vec3 e1 = sg_v3(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+        sg_vec3 e2 = sg_v3(p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]);
+        a += 0.5 * sg_v3_length(sg_v3_cross(e1, e2));
+    }
+    return a;
+}
+
+static sg_status room_cloud(cloud *c, size_t count, float wall, sg_mesh *mesh_out, sg_error *err)
+{
+    /* The window wall keeps the room's thickness: the same opening lets the
+     * same light in, so the thin room's light differs only by leaks. And
+     * the same density of points as the room's (count is the thick room's):
+     * MLS rounds the window's edges by a fraction of a radius, and a few
+     * percent of the window's area is as much light. */
+    sg_room_desc rd = {.wall = wall, .window_wall = SG_ROOM_WALL}, thick = {0};
+    sg_mesh m = {0}, t = {0};
+    sg_status st = sg_room_mesh(&rd, &m, err);
+    if (st == SG_OK)
+        st = sg_room_mesh(&thick, &t, err);
+    if (st != SG_OK) {
+        sg_mesh_free(&m);
+        return st;
+    }
+    count = (size_t)llround((double)count * mesh_area(&m) / mesh_area(&t));
+    sg_mesh_free(&t);
+    sg_model_points_desc d = {.points = count, .seed = 13};
+    sg_pointset ps = {0};
+    st = sg_model_points_from_mesh(&m, "room", &d, &ps, err);
+    if (st == SG_OK)
+        st = push_pointset(c, &ps, err);
+    sg_pointset_free(&ps);
+    if (st == SG_OK)
+        *mesh_out = m;
+    else
+        sg_mesh_free(&m);
+    return st;
+}
+
+/* A closed concave scan with deep folds: Lucy (../shared/data), or the
+ * bunny where that folder is absent (the case then says so in `what`),
+ * sampled like any mesh and placed 2 units tall on y = 0 (points and the
+ * truth alike). */
+static sg_status folds_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_vec3 *translate, float *scale,
+                             int *is_lucy, sg_error *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/meshes/lucy/Lucy100k.ply", SG_SHARED_DATA_DIR);
+    *is_lucy = access(path, R_OK) == 0;
+    if (!*is_lucy)
+        snprintf(path, sizeof path, "%s/bunny.ply", SG_ASSET_DIR);
+    sg_mesh m = {0};
+    sg_status st = sg_mesh_read(path, &m, err);
+    if (st != SG_OK)
+        return st;
+    sg_aabb b = sg_aabb_empty();
+    for (size_t i = 0; i < m.vertex_count; i++)
+        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
+    sg_ground_placement pl;
+    st = sg_mesh_ground_placement(b, 2.0f, &pl, err);
+    sg_model_points_desc d = {.points = count, .seed = 17};
+    sg_pointset ps = {0};
+    if (st == SG_OK)
+        st = sg_model_points_from_mesh(&m, path, &d, &ps, err);
+    for (size_t i = 0; st == SG_OK && i < ps.count; i++) {
+        sg_vec3 p = sg_v3_add(pl.translate, sg_v3_scale(sg_pointset_position(&ps, i), pl.scale));
+        if (!cloud_push(c, p, sg_pointset_normal(&ps, i)))
+            st = sg_error_set(err, SG_ERR_NOMEM, "folds: out of memory");
+    }
+    sg_pointset_free(&ps);
+    if (st == SG_OK) {
+        *mesh_out = m;
+        *translate = pl.translate;
+        *scale = pl.scale;
+    } else
+        sg_mesh_free(&m);
+    return st;
+}
+
 static float gauss(uint64_t item, uint32_t dim)
 {
     float u1 = sg_rng_float(5, item, 0, 2 * dim), u2 = sg_rng_float(5, item, 0, 2 * dim + 1);
@@ -314,6 +405,29 @@ sg_status sg_verify_case_make(int index, sg_surface_model model, int small, cons
         if (st == SG_OK)
             st = sg_truth_add_rect(&c.truth, 0.0f, -2, 2, -2, 2, err);
         break;
+    case C_ROOM: case C_THIN_WALL: {
+        /* Walls 0.2 thick (about 2.5 splat radii at 60k points), or 0.04
+         * (about r/2) but for the window wall: the thin room is the room
+         * with its walls' two sides within each other's support, to be
+         * lit exactly as the thick one (reference energy vs clean 1). */
+        size_t n = small ? 10000 : 60000;
+        st = room_cloud(&pts, n, index == C_ROOM ? SG_ROOM_WALL : 0.04f, &mesh, err);
+        if (st == SG_OK)
+            st = sg_truth_add_mesh(&c.truth, &mesh, sg_v3(0, 0, 0), 1.0f, err);
+        env = "{\"builtin\": \"sunsky\"}";
+        break;
+    }
+    case C_FOLDS: {
+        sg_vec3 tr;
+        float sc;
+        int lucy;
+        st = folds_cloud(&pts, small ? 20000 : 100000, &mesh, &tr, &sc, &lucy, err);
+        if (st == SG_OK)
+            st = sg_truth_add_mesh(&c.truth, &mesh, tr, sc, err);
+        if (!lucy)
+            c.what = "close-up of the bunny (../shared/data/meshes/lucy absent)";
+        break;
+    }
     case C_TINY_SUN:
         st = sphere_cloud(&pts, n_sphere, sg_v3(0, 1, 0), err);
         if (st == SG_OK)
@@ -377,6 +491,17 @@ sg_status sg_verify_case_make(int index, sg_surface_model model, int small, cons
     if (index == C_INSIDE) {
         st = sg_camera_look_at(sg_v3(0, 0, 0), sg_v3(1.0f, -0.2f, 0.3f), up, 80.0f, 1.0f, &c.camera, err);
         fov = 80.0f;
+    } else if (index == C_ROOM || index == C_THIN_WALL) {
+        /* from a back corner towards the window wall and the floor the sun lights */
+        st = sg_camera_look_at(sg_v3(-1.6f, 1.5f, 1.5f), sg_v3(1.0f, 0.8f, -0.4f), up, 70.0f, 1.0f, &c.camera, err);
+        fov = 70.0f;
+    } else if (index == C_FOLDS) {
+        /* the middle of the figure (drapery) from the front (-z), close */
+        sg_aabb f = box;
+        float h = f.hi.y - f.lo.y, cx = 0.5f * (f.lo.x + f.hi.x);
+        f.lo.y = f.lo.y + 0.35f * h, f.hi.y = f.lo.y + 0.22f * h;
+        f.lo.x = cx - 0.11f * h, f.hi.x = cx + 0.11f * h;
+        st = sg_camera_frame(f, sg_v3(0, -0.15f, 1.0f), up, fov, 1.0f, 0.9f, &c.camera, err);
     } else if (index == C_GRAZING) {
         /* 85 deg from the normal: elevation 5 deg, 3 units away. */
         float el = 5.0f * 3.14159265f / 180.0f;

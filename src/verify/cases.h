@@ -23,8 +23,18 @@
  *   tiny_sun          sphere on a plane under the analytic sky with a sun of
  *                     radius 0.1 deg and radiance 2.5e6 (the default sun's
  *                     power in 1/25 of its solid angle)
+ *   room              the built-in room (points/room.h: walls 0.2 thick, one
+ *                     window) sampled to 60k points, under the analytic sun
+ *                     and sky, seen from inside (issue 12)
+ *   thin_wall         the same room with walls 0.04 thick (about half a
+ *                     splat radius: each wall's two sides within each
+ *                     other's support) but for the window wall (0.2, so the
+ *                     same light comes in), same view; baseline: room
+ *   folds             a close-up of the drapery of Lucy (../shared/data,
+ *                     sampled to 100k points; the bunny where the folder is
+ *                     absent), a concave closed scan
  * Point counts shrink (about / 6) with `small` (the CI sweep); coarse_2k
- * keeps its 2,000. Every case has a lambert material, albedo 0.7, and the
+ * keeps its 2,000. The truth of room, thin_wall and folds is their mesh. Every case has a lambert material, albedo 0.7, and the
  * analytic "sky" envmap unless said otherwise. `baseline` names the clean
  * case a degraded one is compared with (same view), or -1.
  *

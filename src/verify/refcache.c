@@ -105,8 +105,10 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
         FILE *f = fopen(txt, "r");
         if (f) {
             double secs = 0;
-            unsigned long long paths = 0;
-            int ok = fscanf(f, "seconds %lf paths %llu", &secs, &paths) == 2;
+            unsigned long long paths = 0, c[4] = {0, 0, 0, 0};
+            int ok = fscanf(f, "seconds %lf paths %llu surface_hits %llu back_hits %llu camera_back_hits %llu "
+                               "back_paths %llu",
+                            &secs, &paths, &c[0], &c[1], &c[2], &c[3]) == 6;
             fclose(f);
             sg_ref_result r = {0};
             sg_error ignored;
@@ -115,6 +117,8 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
                 r.mean.height == d.height && r.std_error.width == d.width && r.std_error.height == d.height) {
                 r.seconds = secs;
                 r.paths = paths;
+                r.counts = (sg_ref_counts){.surface_hits = c[0], .back_hits = c[1], .camera_back_hits = c[2],
+                                           .back_paths = c[3]};
                 *out = r;
                 *cached = 1;
                 return SG_OK;
@@ -146,7 +150,13 @@ sg_status sg_verify_reference(const sg_world *w, const sg_verify_ref_desc *d0, s
             snprintf(tmp, sizeof tmp, "%s.tmp%ld", txt, (long)getpid());
             FILE *f = fopen(tmp, "w");
             if (f) {
-                int ok = fprintf(f, "seconds %.6f paths %llu\n", r.seconds, (unsigned long long)r.paths) > 0;
+                int ok = fprintf(f,
+                                 "seconds %.6f paths %llu surface_hits %llu back_hits %llu camera_back_hits %llu "
+                                 "back_paths %llu\n",
+                                 r.seconds, (unsigned long long)r.paths, (unsigned long long)r.counts.surface_hits,
+                                 (unsigned long long)r.counts.back_hits,
+                                 (unsigned long long)r.counts.camera_back_hits,
+                                 (unsigned long long)r.counts.back_paths) > 0;
                 ok = (fclose(f) == 0) && ok;
                 if (!ok || rename(tmp, txt) != 0)
                     remove(tmp);

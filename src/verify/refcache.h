@@ -8,7 +8,8 @@
  * the mean and its standard error as EXR files under a cache folder named
  * by a key over the scene (every part, plus the contents of its model and
  * envmap files), the camera, the size, spp, seed and depth:
- *     <cache>/<key>.exr, <key>.se.exr, <key>.txt (seconds and paths)
+ *     <cache>/<key>.exr, <key>.se.exr, <key>.txt (seconds, paths and the
+ *     hit counts, sg_ref_counts)
  * Every file is written to a temporary name and renamed; the .txt is
  * written last, so a cache entry without it is ignored.
  * What it does NOT do: progressive refinement of a cached entry.
@@ -32,8 +33,9 @@
  * reused. 2: bilinear envmap lookup with max-weight sampling (envmap.h);
  * files without colours give white points (no clay tint); 3: Russian
  * roulette only below throughput 1 (pathtrace.h), mesh samples on the
- * Phong-tessellated surface. */
-#define SG_VERIFY_REF_VERSION 3u
+ * Phong-tessellated surface; 4: issue 12's leak-free surfaces (keyed
+ * splats, radii per layer) and the back-hit counts in the .txt. */
+#define SG_VERIFY_REF_VERSION 4u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

@@ -30,13 +30,16 @@
 #include "verify/truth.h"
 #include "verify/verify_int.h"
 
-#define NFIG 18 /* figures a child reports, in the order of fig_names */
+#define NFIG 20 /* figures a child reports, in the order of fig_names */
 static const char *const fig_names[NFIG] = {
     "points",       "truth_pixels", "hole_rate", "spill_rate", "normal_err_deg", "flipped_rate",
     "bake_rel_mse", "bake_energy_ratio", "bake_p99", "bake_nan", "ref_nan", "ref_lum", "bake_lum",
-    "world_s",      "ref_s",        "ref_cached", "bake_s",   "ref_noise_rel_mse"};
+    "world_s",      "ref_s",        "ref_cached", "bake_s",   "ref_noise_rel_mse",
+    "back_hit_rate", "camera_back_hit_rate"};
 enum { F_POINTS, F_TRUTHPIX, F_HOLE, F_SPILL, F_NORMAL, F_FLIP, F_RELMSE, F_ENERGY, F_P99, F_BAKENAN, F_REFNAN,
-       F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES, F_NOISE };
+       F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES, F_NOISE, F_BACK, F_CAMBACK };
+/* The CSV writes figures [0, F_BACK), then ref_energy_vs_clean and
+ * baseline, then the rest: columns keep the places the charts read. */
 
 static const char *model_name(sg_surface_model m) { return m == SG_SURFACE_DISK ? "disk" : "mls"; }
 
@@ -92,6 +95,11 @@ static sg_status run_case(const vctx *c, int ci, sg_surface_model model, double 
         goto done;
     fig[F_REFS] = ref.seconds;
     fig[F_CACHED] = cached;
+    /* Hits from behind (ref/pathtrace.h sg_ref_counts): per surface hit of
+     * the reference's paths, and per camera ray (camera_inside: every camera
+     * hit is one, legitimately; elsewhere each follows a leak). */
+    fig[F_BACK] = ref.counts.surface_hits ? (double)ref.counts.back_hits / (double)ref.counts.surface_hits : 0.0;
+    fig[F_CAMBACK] = (double)ref.counts.camera_back_hits / ((double)z.image * z.image * z.spp);
     /* The relMSE the reference owes to its own noise: a floor under the
      * bake's figure (image_metrics.h). */
     st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &fig[F_NOISE], err);
@@ -290,21 +298,27 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
     }
     vtable t = {0};
     sg_verify__tprintf(&t, "case,model,status,wall_s");
-    for (int k = 0; k < NFIG; k++)
+    for (int k = 0; k < F_BACK; k++)
         sg_verify__tprintf(&t, ",%s", fig_names[k]);
-    sg_verify__tprintf(&t, ",ref_energy_vs_clean,baseline\n");
+    sg_verify__tprintf(&t, ",ref_energy_vs_clean,baseline");
+    for (int k = F_BACK; k < NFIG; k++)
+        sg_verify__tprintf(&t, ",%s", fig_names[k]);
+    sg_verify__tprintf(&t, "\n");
     for (int i = 0; i < n; i++)
         for (int m = 0; m < 2 && run[i]; m++) {
             const row *r = &rows[2 * i + m];
             sg_verify__tprintf(&t, "%s,%s,%s,%.3f", sg_verify_case_name(i), model_name((sg_surface_model)m),
                                r->status, r->wall);
-            for (int k = 0; k < NFIG; k++)
+            for (int k = 0; k < F_BACK; k++)
                 csv_num(&t, r->have, r->fig[k], "%.6g");
             int base = sg_verify_case_baseline(i);
             const row *b = base >= 0 ? &rows[2 * base + m] : NULL;
             int have = r->have && b && b->have && b->fig[F_REFLUM] > 0;
             csv_num(&t, have, have ? r->fig[F_REFLUM] / b->fig[F_REFLUM] : 0, "%.6g");
-            sg_verify__tprintf(&t, ",%s\n", base >= 0 ? sg_verify_case_name(base) : "-");
+            sg_verify__tprintf(&t, ",%s", base >= 0 ? sg_verify_case_name(base) : "-");
+            for (int k = F_BACK; k < NFIG; k++)
+                csv_num(&t, r->have, r->fig[k], "%.6g");
+            sg_verify__tprintf(&t, "\n");
             t.rows++;
         }
     sg_status st = sg_verify__twrite(&t, c->d.out_dir, "stability.csv", err);
@@ -315,15 +329,16 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
     vtable md = {0};
     sg_verify__tprintf(&md,
                        "| case | status (mls / disk) | holes %% (mls / disk) | normal error deg | flipped %% | "
-                       "bake energy error %% | bake relMSE | NaN bake+ref | reference energy vs clean |\n"
-                       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+                       "bake energy error %% | bake relMSE | NaN bake+ref | back hits %% of hits | "
+                       "reference energy vs clean |\n"
+                       "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < n; i++) {
         if (!run[i])
             continue;
         const row *a = &rows[2 * i], *d = &rows[2 * i + 1];
         char cell[8][80];
         const row *rr[2] = {a, d};
-        double v[2][6];
+        double v[2][7];
         for (int m = 0; m < 2; m++) {
             const row *r = rr[m];
             v[m][0] = 100 * r->fig[F_HOLE];
@@ -332,9 +347,10 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
             v[m][3] = 100 * (r->fig[F_ENERGY] - 1);
             v[m][4] = r->fig[F_RELMSE];
             v[m][5] = r->fig[F_BAKENAN] + r->fig[F_REFNAN];
+            v[m][6] = 100 * r->fig[F_BACK];
         }
-        const char *fmt[6] = {"%.2f", "%.1f", "%.1f", "%+.1f", "%.4f", "%g"};
-        for (int k = 0; k < 6; k++) {
+        const char *fmt[7] = {"%.2f", "%.1f", "%.1f", "%+.1f", "%.4f", "%g", "%.3f"};
+        for (int k = 0; k < 7; k++) {
             char x[2][32];
             for (int m = 0; m < 2; m++)
                 if (rr[m]->have)
@@ -343,8 +359,8 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
                     snprintf(x[m], sizeof x[m], "–");
             snprintf(cell[k], sizeof cell[k], "%s / %s", x[0], x[1]);
         }
-        sg_verify__tprintf(&md, "| %s | %s / %s | %s | %s | %s | %s | %s | %s | ", sg_verify_case_name(i),
-                           a->status, d->status, cell[0], cell[1], cell[2], cell[3], cell[4], cell[5]);
+        sg_verify__tprintf(&md, "| %s | %s / %s | %s | %s | %s | %s | %s | %s | %s | ", sg_verify_case_name(i),
+                           a->status, d->status, cell[0], cell[1], cell[2], cell[3], cell[4], cell[5], cell[6]);
         int base = sg_verify_case_baseline(i);
         for (int m = 0; m < 2; m++) {
             const row *r = rr[m], *b = base >= 0 ? &rows[2 * base + m] : NULL;

@@ -213,6 +213,13 @@ static void test_scene_file_defaults(void **state)
     assert_v3("up", sf.cameras[0].up, 0, 1, 0);
     assert_true(sf.cameras[0].fov_deg == 40.0f);
     sg_scene_file_free(&sf);
+
+    /* The built-in room (points/room.h) is a builtin like the others. */
+    sf = parse_ok(json("{'models': [{'builtin': 'room', 'points': 20000}]}"));
+    assert_int_equal(sf.models[0].kind, SG_SCENE_MODEL_ROOM);
+    assert_null(sf.models[0].path);
+    assert_int_equal(sf.models[0].points.points, 20000);
+    sg_scene_file_free(&sf);
 }
 
 /* ---- 3 ---------------------------------------------------------------- */
@@ -270,7 +277,7 @@ static const bad_case BAD[] = {
     {M0 "'surface': {'samples_per_cell': 0}}]}",
      "scene.json: $.models[0].surface.samples_per_cell: expected an integer in [1,1024], got 0"},
     {"{'models': [{'builtin': 'dragon'}]}",
-     "scene.json: $.models[0].builtin: expected one of 'bunny', 'ground', 'sphere', got 'dragon'"},
+     "scene.json: $.models[0].builtin: expected one of 'bunny', 'ground', 'sphere', 'room', got 'dragon'"},
     {"{'models': [{'path': 'bunny.stl'}]}",
      "scene.json: $.models[0].path: expected a .ply, .obj, .xyz, .txt or .pcd file path, got 'bunny.stl'"},
     /* a long value keeps its end, where a path's extension is */

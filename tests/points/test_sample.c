@@ -521,6 +521,44 @@ static void test_radius_grid(void **state)
     sg_pointset_free(&ps);
 }
 
+/* A thin wall: two 30 x 30 grids 0.3 h apart with opposed normals (the
+ * two sides of a sheet). Each point's radius comes from its own layer, as
+ * if the other were absent: sqrt(2) h for k = 8 (issue 12: counting the
+ * other side gave 1.044 h, and each side kept holes). Two layers facing
+ * the same way are one surface sampled twice and keep the plain rule. */
+static void test_radius_two_layers(void **state)
+{
+    (void)state;
+    sg_error err;
+    const float h = 0.125f;
+    for (int same = 0; same < 2; ++same) {
+        sg_pointset ps;
+        assert_int_equal(sg_pointset_alloc(&ps, 1800, &err), SG_OK);
+        for (size_t i = 0; i < 1800; ++i) {
+            size_t j = i % 900;
+            int lower = i >= 900;
+            ps.px[i] = h * (float)(j % 30);
+            ps.py[i] = 1.0f - (lower ? 0.3f * h : 0.0f);
+            ps.pz[i] = h * (float)(j / 30);
+            ps.nx[i] = 0, ps.ny[i] = lower && !same ? -1.0f : 1.0f, ps.nz[i] = 0;
+        }
+        sg_radius_desc rd = {.k = 8, .layers = 1};
+        assert_int_equal(sg_points_estimate_radii(&ps, &rd, &err), SG_OK);
+        /* same: the point across at 0.3 h, 4 at h, then 4 across at
+         * sqrt(1 + 0.09) h and 4 at sqrt(2) h: the 8th is the across one */
+        float want = same ? 1.04403065f * h : 0.17677669f;
+        for (size_t i = 0; i < 1800; ++i) {
+            size_t a = i % 900 % 30, b = i % 900 / 30;
+            if (a < 2 || b < 2 || a > 27 || b > 27)
+                continue;
+            if (fabsf(ps.radius[i] - want) > 1e-5f)
+                fail_msg("two layers (%s normals): point %zu radius %.9g, want %.9g", same ? "same" : "opposed", i,
+                         (double)ps.radius[i], (double)want);
+        }
+        sg_pointset_free(&ps);
+    }
+}
+
 static void test_radius_duplicates(void **state)
 {
     (void)state;
@@ -733,6 +771,7 @@ int main(void)
         cmocka_unit_test(test_sample_errors),
         cmocka_unit_test(test_sample_from_vertices),
         cmocka_unit_test(test_radius_grid),
+        cmocka_unit_test(test_radius_two_layers),
         cmocka_unit_test(test_radius_duplicates),
         cmocka_unit_test(test_sample_faces_oriented_and_deduplicated),
         cmocka_unit_test(test_radius_stray_points_capped),

@@ -50,7 +50,7 @@ rows() { awk 'END { print NR - 1 }' "$1"; }
 
 # Stability: every case x {mls, disk}, once each, ok, no NaN.
 S=$OUT/stability.csv
-check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_noise_rel_mse,ref_energy_vs_clean,baseline" "1,2,3,24" 23
+check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_noise_rel_mse,ref_energy_vs_clean,baseline,back_hit_rate,camera_back_hit_rate" "1,2,3,24" 23
 ncase=0
 for c in $("$VERIFY" --list-cases); do
   ncase=$((ncase + 1))
