@@ -6,7 +6,12 @@
  * Scenes ("close-ups"): a scan sampled to CLOSEUP_POINTS points, its longest
  * side SCENE_LENGTH units, standing on the built-in ground (albedo 0.5),
  * Lambert albedo 0.7, under a real HDR map, seen by a fixed close camera
- * (world units of that placement). With ci: the asset bunny under the sky.
+ * (world units of that placement). And the interior: the built-in room
+ * (CLOSEUP_POINTS points, window in the +X wall) with the bunny inside
+ * (a quarter of that), albedo 0.7, lit only through the window by the
+ * built-in sun and sky, seen from inside; its "model" is every covered
+ * pixel. The whole ladder runs on lucy_torso and the room, its core rungs
+ * on the others. With ci: the asset bunny under the sky.
  *
  * Per close-up:
  *  - the world's build, timed as process CPU seconds (both threads);
@@ -22,9 +27,9 @@
  *    timed), hence the CPU seconds of one frame x frame reference frame as
  *    accurate as the default bake (its noise relMSE falls as 1/spp), over
  *    the default bake's + one lookup frame's CPU seconds;
- *  - the white furnace: the scan alone (no ground), albedo 1, uniform sky
- *    L = 1; every covered pixel of the lookup frame should be 1: mean,
- *    smallest, largest, share beyond 3%.
+ *  - the white furnace: the scan alone (no ground; the room with its
+ *    bunny), albedo 1, uniform sky L = 1; every covered pixel of the
+ *    lookup frame should be 1: mean, smallest, largest, share beyond 3%.
  * Output: gi.csv, furnace.csv, gi.md in out_dir; difference images in
  * diff_dir; scripts/verify-charts.sh draws verify_gi.png from gi.csv.
  *
@@ -63,20 +68,36 @@ typedef struct closeup {
     const char *mesh;        /* under data_dir; NULL: the built-in bunny  */
     const char *env;         /* under data_dir; NULL: the built-in sky    */
     float eye[3], look[3], fov;
+    int room;                /* the built-in room with the bunny inside,
+                                under the built-in sun and sky (mesh and
+                                env unused); its model is every covered
+                                pixel, and paths run to ROOM_DEPTH        */
+    int sweep;               /* the whole ladder; 0: its core rungs only  */
 } closeup;
+
+/* Path depth of the references: 8 bounces on a scan under the open sky
+ * (the 9th carries well below 0.1% there); in the closed room, where a
+ * path leaves only through the window, light of albedo 0.7 loses 0.7^n
+ * after n bounces: 64 leaves 1e-10 (the bake's transport solve sums every
+ * bounce). */
+#define OPEN_DEPTH 8
+#define ROOM_DEPTH 64
 
 static const char COURTYARD[] = "envmaps/blender_studiolights/courtyard.exr";
 static const char VENICE[] = "envmaps/threejs_equirect/venice_sunset_1k.hdr";
 
 static const closeup closeups[] = {
-    {"lucy_torso", "meshes/lucy/Lucy100k.ply", COURTYARD, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f},
-    {"lucy_sunset", "meshes/lucy/Lucy100k.ply", VENICE, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f},
+    {"lucy_torso", "meshes/lucy/Lucy100k.ply", COURTYARD, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f, 0, 1},
+    {"room", NULL, NULL, {-1.75f, 1.55f, 1.6f}, {0.6f, 0.7f, -0.6f}, 65.0f, 1, 1},
+    {"lucy_sunset", "meshes/lucy/Lucy100k.ply", VENICE, {1.5f, 6.5f, -5.5f}, {0.0f, 6.2f, 0.0f}, 35.0f, 0, 0},
     {"dragon_head", "meshes/stanford_dragon/dragon_vrip.ply", COURTYARD, {1.5f, 6.5f, 7.5f}, {-2.8f, 4.2f, 0.0f},
-     32.0f},
+     32.0f, 0, 0},
     {"armadillo_chest", "meshes/armadillo/armadillo_50k.obj", COURTYARD, {1.5f, 6.8f, -6.5f}, {0.0f, 6.2f, 0.0f},
-     38.0f},
+     38.0f, 0, 0},
 };
-static const closeup ci_closeup = {"bunny_ci", NULL, NULL, {4.0f, 6.0f, 9.0f}, {0.5f, 4.5f, 0.0f}, 40.0f};
+static const closeup ci_closeup = {"bunny_ci", NULL, NULL, {4.0f, 6.0f, 9.0f}, {0.5f, 4.5f, 0.0f}, 40.0f, 0, 1};
+
+static int closeup_depth(const closeup *cu) { return cu->room ? ROOM_DEPTH : OPEN_DEPTH; }
 
 /* The ladder of bakes: a point of the error-against-time chart each. */
 typedef struct rung {
@@ -89,32 +110,34 @@ typedef struct rung {
     int is_default;          /* the library's defaults: the budget's bake */
     int chart;               /* on the error-against-time curve (the rest
                                 are the gather-ray and k sweeps)          */
+    int core;                /* run on every close-up (the others only on
+                                those with sweep)                         */
 } rung;
 
 static const rung ladder[] = {
     /* the transport estimator from coarse to fine: the curve */
-    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0, 0, 1},
-    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0, 0, 1},
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 0, 1, 1},
-    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0, 0, 1},
-    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0, 0, 1},
-    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0, 0, 1},
-    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0, 0, 1},
+    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0, 0, 1, 0},
+    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0, 0, 1, 1},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 0, 1, 1, 1},
+    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0, 0, 1, 0},
+    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0, 0, 1, 1},
+    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0, 0, 1, 0},
+    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0, 0, 1, 0},
     /* gather rays alone, at the default spacing and envmap rays */
-    {"32+16", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 16, 0, 0, 0, 0},
-    {"32+32", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 32, 0, 0, 0, 0},
-    {"32+128", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 128, 0, 0, 0, 0},
-    {"32+256", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 256, 0, 0, 0, 0},
+    {"32+16", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 16, 0, 0, 0, 0, 0},
+    {"32+32", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 32, 0, 0, 0, 0, 0},
+    {"32+128", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 128, 0, 0, 0, 0, 0},
+    {"32+256", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 256, 0, 0, 0, 0, 0},
     /* the photon estimator: photons (its curve), then k */
-    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0, 0, 1},
-    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0, 0, 1},
-    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0, 0, 1},
-    {"1M k16", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 16, 0, 0},
-    {"1M k256", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 256, 0, 0},
+    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0, 0, 1, 1},
+    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0, 0, 1, 1},
+    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0, 0, 1, 0},
+    {"1M k16", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 16, 0, 0, 0},
+    {"1M k256", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 256, 0, 0, 0},
 };
 static const rung ci_ladder[] = {
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 0, 1, 1},
-    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0, 0, 1},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 0, 1, 1, 1},
+    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0, 0, 1, 1},
 };
 
 typedef struct gplan {
@@ -126,7 +149,7 @@ static gplan make_plan(const vctx *c)
 {
     if (c->d.ci)
         return (gplan){.points = 5000, .image = 24, .frame = 32, .spp = 16, .budget_side = 16, .budget_spp = 2};
-    return (gplan){.points = CLOSEUP_POINTS, .image = 128, .frame = 512, .spp = 4096, .budget_side = 64,
+    return (gplan){.points = CLOSEUP_POINTS, .image = 128, .frame = 512, .spp = 2048, .budget_side = 64,
                    .budget_spp = 16};
 }
 
@@ -147,7 +170,15 @@ static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int
 {
     char model[5000], env[5000], json[12000], mesh[4400];
     double albedo = furnace ? 1.0 : MODEL_ALBEDO;
-    if (cu->mesh) {
+    if (cu->room) {
+        /* examples/room_sunsky.json's room and bunny, in grey */
+        snprintf(model, sizeof model,
+                 "{\"builtin\": \"room\", \"points\": %zu, \"material\": {\"type\": \"lambert\", \"albedo\": "
+                 "[%g, %g, %g], \"use_point_colors\": false}}, {\"builtin\": \"bunny\", \"points\": %zu, "
+                 "\"transform\": {\"translate\": [0.2, 0, -0.3], \"rotate_deg\": [0, -60, 0], \"scale\": 0.12}, "
+                 "\"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}",
+                 points, albedo, albedo, albedo, points / 4, albedo, albedo, albedo);
+    } else if (cu->mesh) {
         snprintf(mesh, sizeof mesh, "%s/%s", c->d.data_dir, cu->mesh);
         sg_aabb b;
         sg_ground_placement pl;
@@ -170,12 +201,14 @@ static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int
     }
     if (furnace)
         snprintf(env, sizeof env, "{\"builtin\": \"uniform\", \"radiance\": [1, 1, 1]}");
+    else if (cu->room)
+        snprintf(env, sizeof env, "{\"builtin\": \"sunsky\"}");
     else if (cu->env)
         snprintf(env, sizeof env, "{\"path\": \"%s/%s\"}", c->d.data_dir, cu->env);
     else
         snprintf(env, sizeof env, "{\"builtin\": \"sky\"}");
     char ground[256] = "";
-    if (!furnace)
+    if (!furnace && !cu->room)
         snprintf(ground, sizeof ground,
                  ", {\"builtin\": \"ground\", \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], "
                  "\"use_point_colors\": false}}",
@@ -185,7 +218,7 @@ static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int
                      "%.9g], \"look\": [%.9g, %.9g, %.9g], \"fov_deg\": %g}], \"render\": {\"max_depth\": %d}}",
                      model, ground, env, (double)cu->eye[0], (double)cu->eye[1], (double)cu->eye[2],
                      (double)cu->look[0], (double)cu->look[1], (double)cu->look[2], (double)cu->fov,
-                     furnace ? 1024 : 8);
+                     furnace ? 1024 : closeup_depth(cu));
     if (n < 0 || (size_t)n >= sizeof json)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: scene JSON too long (paths?)", cu->name);
     sg_status st = sg_scene_file_parse(json, (size_t)n, cu->name, NULL, sf, err);
@@ -207,8 +240,10 @@ static sg_camera closeup_camera(const closeup *cu)
     return cam;
 }
 
-/* Per pixel of an n x n frame: 1 where the centre ray hits model 0. */
-static sg_status model_mask(const sg_world *w, const sg_camera *cam, int n, unsigned char **out, sg_error *err)
+/* Per pixel of an n x n frame: 1 where the centre ray hits model 0 (any
+ * model with all). */
+static sg_status model_mask(const sg_world *w, const sg_camera *cam, int n, int all, unsigned char **out,
+                            sg_error *err)
 {
     unsigned char *mask = calloc((size_t)n * (size_t)n, 1);
     if (!mask)
@@ -217,7 +252,7 @@ static sg_status model_mask(const sg_world *w, const sg_camera *cam, int n, unsi
         for (int x = 0; x < n; ++x) {
             sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, n, n);
             sg_world_hit h;
-            mask[(size_t)y * (size_t)n + (size_t)x] = sg_world_intersect(w, &r, &h, NULL) && h.model == 0;
+            mask[(size_t)y * (size_t)n + (size_t)x] = sg_world_intersect(w, &r, &h, NULL) && (all || h.model == 0);
         }
     *out = mask;
     return SG_OK;
@@ -288,11 +323,11 @@ static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, cons
 
 /* The reference path tracer's paths per CPU second on this scene: a small
  * render at pixel centres, timed. */
-static sg_status ref_rate(const gplan *p, const sg_world *w, const sg_camera *cam, double *paths_per_cpu_s,
-                          sg_error *err)
+static sg_status ref_rate(const gplan *p, const sg_world *w, const sg_camera *cam, int max_depth,
+                         double *paths_per_cpu_s, sg_error *err)
 {
     sg_ref_desc rd = {.camera = *cam, .width = p->budget_side, .height = p->budget_side, .spp = p->budget_spp,
-                      .max_depth = 8, .seed = 77, .pixel_centres = 1};
+                      .max_depth = max_depth, .seed = 77, .pixel_centres = 1};
     sg_ref_result r = {0};
     double t0 = cpu_now();
     sg_status st = sg_ref_render(w, &rd, &r, err);
@@ -367,13 +402,14 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
                            "frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,"
                            "model_pixels,ref_noise,ref_spp,image_size,k,chart\n");
     sg_verify__tprintf(&ft, "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s\n");
-    sg_verify__tprintf(&md, "Close-ups of concave scans (%zu points each, on the ground), %dx%d lookup frame "
-                            "against a %d-spp reference at pixel centres; CPU seconds of both threads; model: "
-                            "the pixels of the scan.\n\n| scene | bake | bake CPU s | relMSE | relMSE model | "
+    sg_verify__tprintf(&md, "Close-ups of concave scans (%zu points each, on the ground) and the room lit through "
+                            "its window (as many, and the bunny inside), %dx%d lookup frame against a %d-spp "
+                            "reference at pixel centres; CPU seconds of both threads; model: the pixels of the "
+                            "scan (of the room: every covered pixel).\n\n| scene | bake | bake CPU s | relMSE | relMSE model | "
                             "energy model | p99 | within ref. 3 sigma |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
                        p.points, p.image, p.image, p.spp);
-    sg_verify__tprintf(&fmd, "\nWhite furnace (the scan alone, albedo 1, uniform sky L = 1, %dx%d): every pixel "
-                             "should be 1.\n\n| scene | bake | pixels | mean | smallest | largest | beyond 3%% | "
+    sg_verify__tprintf(&fmd, "\nWhite furnace (the scan alone, the room with its bunny, albedo 1, uniform sky L = "
+                             "1, %dx%d): every pixel should be 1.\n\n| scene | bake | pixels | mean | smallest | largest | beyond 3%% | "
                              "bake CPU s |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
                        p.image, p.image);
     sg_verify__tprintf(&bmd, "\nBudget: the default bake + one %dx%d lookup frame against one %dx%d reference frame "
@@ -400,7 +436,7 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
         sg_camera cam = closeup_camera(cu);
         sg_verify__log(c, "gi: %s, world %.1f CPU s\n", cu->name, world_cpu);
         sg_verify_ref_desc rd = {.camera = cam, .width = p.image, .height = p.image, .spp = p.spp,
-                                 .max_depth = 8, .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(&sf)};
+                                 .max_depth = closeup_depth(cu), .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(&sf)};
         sg_ref_result ref = {0};
         int cached = 0;
         double noise = 0, rate = 0;
@@ -409,14 +445,16 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
         if (st == SG_OK)
             st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &noise, err);
         if (st == SG_OK)
-            st = model_mask(w, &cam, p.image, &mask, err);
+            st = model_mask(w, &cam, p.image, cu->room, &mask, err);
         if (st == SG_OK)
-            st = ref_rate(&p, w, &cam, &rate, err);
+            st = ref_rate(&p, w, &cam, closeup_depth(cu), &rate, err);
         if (st == SG_OK)
             sg_verify__log(c, "  reference %d spp%s, own noise relMSE %.2g; %.0f paths per CPU s\n", p.spp,
                            cached ? " (cached)" : "", noise, rate);
         for (int k = 0; k < nrungs && st == SG_OK; ++k) {
             const rung *r = &rungs[k];
+            if (!cu->sweep && !r->core)
+                continue;
             bake_figs f = {0};
             if ((st = run_rung(c, &p, cu, w, &cam, r, &ref, mask, &f, err)) != SG_OK)
                 break;
