@@ -523,7 +523,7 @@ sg_status sg_verify_case_make(int index, sg_surface_model model, int small, cons
         model_json(&jb, 0, ground_ply, 1.0f, 1.0f, model);
     jprintf(&jb,
             "], \"envmap\": %s, \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, %.9g],"
-            " \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], \"fov_deg\": %g}], \"render\": {\"max_depth\": 8}}",
+            " \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], \"fov_deg\": %g}], \"render\": {\"max_depth\": 64}}",
             env, (double)c.camera.eye.x, (double)c.camera.eye.y, (double)c.camera.eye.z, (double)look.x,
             (double)look.y, (double)look.z, (double)fov);
     if (jb.overflow) {
