@@ -188,6 +188,24 @@ static sg_status cube_cloud(cloud *c, int side, sg_error *err)
     return SG_OK;
 }
 
+/* Samples mesh m to count points like any model (model_points.h) into c;
+ * m is handed to *mesh_out on success (the truth) and freed otherwise. */
+static sg_status push_mesh_samples(cloud *c, sg_mesh *m, const char *name, size_t count, uint64_t seed,
+                                   sg_mesh *mesh_out, sg_error *err)
+{
+    sg_model_points_desc d = {.points = count, .seed = seed};
+    sg_pointset ps = {0};
+    sg_status st = sg_model_points_from_mesh(m, name, &d, &ps, err);
+    if (st == SG_OK)
+        st = push_pointset(c, &ps, err);
+    sg_pointset_free(&ps);
+    if (st == SG_OK)
+        *mesh_out = *m;
+    else
+        sg_mesh_free(m);
+    return st;
+}
+
 static sg_status bunny_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_error *err)
 {
     char path[4096];
@@ -196,21 +214,9 @@ static sg_status bunny_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_error
     sg_status st = sg_mesh_read(path, &m, err);
     if (st != SG_OK)
         return st;
-    sg_model_points_desc d = {.points = count, .seed = 11};
-    sg_pointset ps = {0};
-    st = sg_model_points_from_mesh(&m, path, &d, &ps, err);
-    if (st == SG_OK)
-        st = push_pointset(c, &ps, err);
-    sg_pointset_free(&ps);
-    if (st == SG_OK)
-        *mesh_out = m;
-    else
-        sg_mesh_free(&m);
-    return st;
+    return push_mesh_samples(c, &m, path, count, 11, mesh_out, err);
 }
 
-/* The built-in room (points/room.h) with walls `wall` thick, sampled to
- * count points like a mesh; the mesh is the truth. */
 static double mesh_area(const sg_mesh *m)
 {
     double a = 0.0;
@@ -224,6 +230,8 @@ static double mesh_area(const sg_mesh *m)
     return a;
 }
 
+/* The built-in room (points/room.h) with walls `wall` thick, sampled to
+ * count points like a mesh; the mesh is the truth. */
 static sg_status room_cloud(cloud *c, size_t count, float wall, sg_mesh *mesh_out, sg_error *err)
 {
     /* The window wall keeps the room's thickness: the same opening lets the
@@ -242,17 +250,7 @@ static sg_status room_cloud(cloud *c, size_t count, float wall, sg_mesh *mesh_ou
     }
     count = (size_t)llround((double)count * mesh_area(&m) / mesh_area(&t));
     sg_mesh_free(&t);
-    sg_model_points_desc d = {.points = count, .seed = 13};
-    sg_pointset ps = {0};
-    st = sg_model_points_from_mesh(&m, "room", &d, &ps, err);
-    if (st == SG_OK)
-        st = push_pointset(c, &ps, err);
-    sg_pointset_free(&ps);
-    if (st == SG_OK)
-        *mesh_out = m;
-    else
-        sg_mesh_free(&m);
-    return st;
+    return push_mesh_samples(c, &m, "room", count, 13, mesh_out, err);
 }
 
 /* A closed concave scan with deep folds: Lucy (../shared/data), or the
