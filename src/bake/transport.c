@@ -449,19 +449,12 @@ sg_status sg_transport_solve(const sg_world *w, const sg_transport_model *models
     if (max_iterations <= 0)
         max_iterations = 10000;
     size_t *offset = sg_calloc_array(nm + 1, sizeof *offset);
-    sg_vec3 *gloss = sg_alloc_array(nm ? nm : 1, sizeof *gloss); /* per model: k A / pi, glossy share */
-    if (!offset || !gloss) {
-        sg_free(offset);
-        sg_free(gloss);
+    if (!offset)
         return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory");
-    }
     size_t hits = 0;
     for (size_t m = 0; m < nm; ++m) {
         offset[m + 1] = offset[m] + 2 * models[m].sites->count;
         hits += models[m].sites->hits;
-        const sg_material *mat = sg_world_material(w, (uint32_t)m);
-        sg_vec3 r0 = sg_transport_reflectance(mat, sg_v3(0, 0, 0));
-        gloss[m] = r0;
     }
     size_t sites = offset[nm];
     sg_status st = SG_OK;
@@ -496,11 +489,7 @@ sg_status sg_transport_solve(const sg_world *w, const sg_transport_model *models
             float k = sd->hit_k[h];
             const sg_material *mat = sg_world_material(w, hm);
             sg_world_hit wh = {.hit = {.splat = splat}, .model = hm};
-            sg_vec3 rho = sg_world_albedo(w, &wh);
-            sg_vec3 R = sg_v3_add(sg_v3_scale(rho, INV_PI * (mat->type == SG_MATERIAL_GGX
-                                                                 ? 1.0f - (mat->specular > 1.0f ? 1.0f : mat->specular)
-                                                                 : 1.0f)),
-                                  gloss[hm]);
+            sg_vec3 R = sg_transport_reflectance(mat, sg_world_albedo(w, &wh));
             const sg_transport_model *tm = &models[hm];
             uint32_t t = tm->nearest[splat];
             const float *D = tm->sites->ratio + 6 * (size_t)t + 3 * side;
@@ -567,7 +556,6 @@ sg_status sg_transport_solve(const sg_world *w, const sg_transport_model *models
                                       .residual = residual};
 done:
     sg_free(offset);
-    sg_free(gloss);
     sg_free(row);
     sg_free(T);
     sg_free(C);
