@@ -80,31 +80,41 @@ static inline float kernel_sq(sg_kernel kernel, float s2)
     return 1.0f - sqrtf(s2);
 }
 
+/* The running sums of the MLS field at x (sg_mls_field): W, P = sum w (x -
+ * p), N, and the splat of largest weight. */
+typedef struct field_acc {
+    float W, wmax;
+    sg_vec3 P, N;
+    uint32_t best;
+} field_acc;
+
+static inline void field_add(field_acc *a, const sg_splat_soa *s, size_t i, sg_kernel kernel, sg_vec3 x)
+{
+    float dx = x.x - s->px[i], dy = x.y - s->py[i], dz = x.z - s->pz[i];
+    float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i]);
+    if (w <= 0.0f)
+        return;
+    a->W += w;
+    /* Accumulate w (x - p) rather than w p: same F, no cancellation
+     * between W x and sum w p far from the origin. */
+    a->P = sg_v3_add(a->P, sg_v3(w * dx, w * dy, w * dz));
+    a->N = sg_v3_add(a->N, sg_v3(w * s->nx[i], w * s->ny[i], w * s->nz[i]));
+    if (w > a->wmax) {
+        a->wmax = w;
+        a->best = s->id[i];
+    }
+}
+
 float sg_mls_field(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, sg_vec3 x,
                    float *wsum, sg_vec3 *nsum, uint32_t *argmax)
 {
-    float W = 0, wmax = 0;
-    sg_vec3 P = {0, 0, 0}, N = {0, 0, 0};
-    uint32_t best = SG_INVALID_ID;
-    for (size_t i = first; i < first + count; ++i) {
-        float dx = x.x - s->px[i], dy = x.y - s->py[i], dz = x.z - s->pz[i];
-        float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i]);
-        if (w <= 0.0f)
-            continue;
-        W += w;
-        /* Accumulate w (x - p) rather than w p: same F, no cancellation
-         * between W x and sum w p far from the origin. */
-        P = sg_v3_add(P, sg_v3(w * dx, w * dy, w * dz));
-        N = sg_v3_add(N, sg_v3(w * s->nx[i], w * s->ny[i], w * s->nz[i]));
-        if (w > wmax) {
-            wmax = w;
-            best = s->id[i];
-        }
-    }
-    if (wsum) *wsum = W;
-    if (nsum) *nsum = N;
-    if (argmax) *argmax = best;
-    return sg_v3_dot(P, N);
+    field_acc a = {.best = SG_INVALID_ID};
+    for (size_t i = first; i < first + count; ++i)
+        field_add(&a, s, i, kernel, x);
+    if (wsum) *wsum = a.W;
+    if (nsum) *nsum = a.N;
+    if (argmax) *argmax = a.best;
+    return sg_v3_dot(a.P, a.N);
 }
 
 float sg_mls_field_indexed(const sg_pointset *ps, const uint32_t *idx, size_t count, sg_kernel kernel,
@@ -649,31 +659,19 @@ static int sample_count(const sg_mls_params *mp, float len, float rmin)
 static float field_group(const sg_splat_soa *s, size_t first, size_t count, sg_kernel kernel, sg_vec3 x, sg_vec3 o,
                          sg_vec3 d, int gi, float *wsum, sg_vec3 *nsum, uint32_t *argmax)
 {
-    float W = 0, wmax = 0;
-    sg_vec3 P = {0, 0, 0}, N = {0, 0, 0};
-    uint32_t best = SG_INVALID_ID;
+    field_acc a = {.best = SG_INVALID_ID};
     for (size_t i = first; i < first + count; ++i) {
-        float dx = x.x - s->px[i], dy = x.y - s->py[i], dz = x.z - s->pz[i];
         if (s->key && s->key[i]) {
             float qx = s->px[i] - o.x, qy = s->py[i] - o.y, qz = s->pz[i] - o.z;
             if (!in_group(gi, key_side(s->key[i], d, qx, qy, qz)))
                 continue;
         }
-        float w = kernel_sq(kernel, (dx * dx + dy * dy + dz * dz) * s->inv_r[i] * s->inv_r[i]);
-        if (w <= 0.0f)
-            continue;
-        W += w;
-        P = sg_v3_add(P, sg_v3(w * dx, w * dy, w * dz));
-        N = sg_v3_add(N, sg_v3(w * s->nx[i], w * s->ny[i], w * s->nz[i]));
-        if (w > wmax) {
-            wmax = w;
-            best = s->id[i];
-        }
+        field_add(&a, s, i, kernel, x);
     }
-    *wsum = W;
-    *nsum = N;
-    *argmax = best;
-    return sg_v3_dot(P, N);
+    *wsum = a.W;
+    *nsum = a.N;
+    *argmax = a.best;
+    return sg_v3_dot(a.P, a.N);
 }
 
 /* Slow path for a leaf with more than MAX_ACTIVE splats on the ray (rare:
