@@ -74,9 +74,7 @@ sg_status sg_model_scene_make(const sg_model_scene_desc *d, sg_scene_file *out, 
     if (st != SG_OK)
         return st;
     /* Invariant 2: the box after the up turn. */
-    sg_aabb raw = sg_aabb_empty(), box = sg_aabb_empty();
-    for (size_t i = 0; i < mesh.vertex_count; i++)
-        raw = sg_aabb_grow(raw, sg_v3(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]));
+    sg_aabb raw = sg_mesh_bounds(&mesh), box = sg_aabb_empty();
     for (int c = 0; c < 8; c++) {
         sg_vec3 p = sg_v3(c & 1 ? raw.hi.x : raw.lo.x, c & 2 ? raw.hi.y : raw.lo.y, c & 4 ? raw.hi.z : raw.lo.z);
         box = sg_aabb_grow(box, sg_scene_up_apply(d->up, p));

@@ -235,17 +235,22 @@ bool sg_io_parse_number(const char **pp, const char *end, double *out)
     return true;
 }
 
+sg_aabb sg_mesh_bounds(const sg_mesh *m)
+{
+    sg_aabb b = sg_aabb_empty();
+    for (size_t i = 0; i < m->vertex_count; i++)
+        b = sg_aabb_grow(b, sg_v3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2]));
+    return b;
+}
+
 sg_status sg_mesh_read_bounds(const char *path, sg_aabb *out, sg_error *err)
 {
     sg_mesh m = {0};
     sg_status st = sg_mesh_read(path, &m, err);
     if (st != SG_OK)
         return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
+    *out = sg_mesh_bounds(&m);
     sg_mesh_free(&m);
-    *out = b;
     return SG_OK;
 }
 

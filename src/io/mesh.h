@@ -38,6 +38,9 @@ void sg_mesh_free(sg_mesh *mesh);
 
 /* Box of a model file's vertex positions (read, then freed): what the
  * benchmarks and the verifier need to place and frame a scan. */
+/* The box of m's vertices (empty for none). */
+sg_aabb sg_mesh_bounds(const sg_mesh *m);
+
 sg_status sg_mesh_read_bounds(const char *path, sg_aabb *out, sg_error *err);
 
 /* The uniform scale and translation that make box `b` `length` long on its

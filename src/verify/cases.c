@@ -269,11 +269,8 @@ static sg_status folds_cloud(cloud *c, size_t count, sg_mesh *mesh_out, sg_vec3 
     sg_status st = sg_mesh_read(path, &m, err);
     if (st != SG_OK)
         return st;
-    sg_aabb b = sg_aabb_empty();
-    for (size_t i = 0; i < m.vertex_count; i++)
-        b = sg_aabb_grow(b, sg_v3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
     sg_ground_placement pl;
-    st = sg_mesh_ground_placement(b, 2.0f, &pl, err);
+    st = sg_mesh_ground_placement(sg_mesh_bounds(&m), 2.0f, &pl, err);
     sg_model_points_desc d = {.points = count, .seed = 17};
     sg_pointset ps = {0};
     if (st == SG_OK)
