@@ -263,13 +263,19 @@ typedef struct bake_figs {
     size_t model_pixels;
 } bake_figs;
 
+/* The bake settings of a rung (the rest the library's defaults). */
+static sg_bake_desc rung_desc(const rung *r)
+{
+    return (sg_bake_desc){.indirect = r->indirect, .photons = {.count = r->photons}, .gather = {.k = r->k},
+                          .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+}
+
 /* One bake of the ladder against the reference. */
 static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const sg_camera *cam,
                           const rung *r, const sg_ref_result *ref, const unsigned char *mask, bake_figs *f,
                           sg_error *err)
 {
-    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .gather = {.k = r->k},
-                       .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake_desc bd = rung_desc(r);
     sg_bake *b = NULL;
     double t0 = cpu_now();
     sg_status st = sg_bake_create(w, &bd, &b, err);
@@ -338,19 +344,14 @@ static sg_status ref_rate(const gplan *p, const sg_world *w, const sg_camera *ca
     return st;
 }
 
-/* The white furnace on the scan alone: every covered pixel should be 1. */
-static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const rung *r, vtable *t, vtable *md,
-                         sg_error *err)
+/* The white furnace on w, the close-up's furnace world (make_world):
+ * every covered pixel should be 1. */
+static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const rung *r,
+                         vtable *t, vtable *md, sg_error *err)
 {
-    sg_scene_file sf = {0};
-    sg_world *w = NULL;
-    double world_cpu = 0;
-    sg_status st = make_world(c, cu, p->points, 1, &sf, &w, &world_cpu, err);
-    if (st != SG_OK)
-        return st;
+    sg_status st;
     sg_camera cam = closeup_camera(cu);
-    sg_bake_desc bd = {.indirect = r->indirect, .photons = {.count = r->photons}, .gather = {.k = r->k},
-                       .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
+    sg_bake_desc bd = rung_desc(r);
     sg_bake *b = NULL;
     sg_image img = {0};
     double t0 = cpu_now();
@@ -385,8 +386,6 @@ static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const
         sg_bake_destroy(b);
     }
     sg_image_free(&img);
-    sg_world_destroy(w);
-    sg_scene_file_free(&sf);
     return st;
 }
 
@@ -487,12 +486,17 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
         sg_scene_file_free(&sf);
         if (st != SG_OK)
             break;
-        /* The furnace, with the default bake and the photon estimator's. */
+        /* The furnace, with the default bake and the photon estimator's,
+         * on one world. */
+        if ((st = make_world(c, cu, p.points, 1, &sf, &w, &world_cpu, err)) != SG_OK)
+            break;
+        const char *photons = c->d.ci ? "photons" : "1M photons";
         for (int k = 0; k < nrungs && st == SG_OK; ++k)
-            if (rungs[k].is_default || (rungs[k].indirect == SG_BAKE_INDIRECT_PHOTONS && !strcmp(rungs[k].label,
-                                                                                                 c->d.ci ? "photons"
-                                                                                                         : "1M photons")))
-                st = furnace(c, &p, cu, &rungs[k], &ft, &fmd, err);
+            if (rungs[k].is_default ||
+                (rungs[k].indirect == SG_BAKE_INDIRECT_PHOTONS && !strcmp(rungs[k].label, photons)))
+                st = furnace(c, &p, cu, w, &rungs[k], &ft, &fmd, err);
+        sg_world_destroy(w);
+        sg_scene_file_free(&sf);
     }
     if (st == SG_OK)
         st = sg_verify__twrite(&t, c->d.out_dir, "gi.csv", err);
