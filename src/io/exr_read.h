@@ -69,6 +69,13 @@ typedef struct sg_exr_read_info {
  * NULL. On failure *out and *info are untouched. */
 sg_status sg_exr_read(const char *path, sg_image *out, sg_exr_read_info *info, sg_error *err);
 
+/* The size of part 0's data window from the header alone, without reading
+ * any pixel (the same errors as sg_exr_read for the file and its header).
+ * Decoding time and memory grow with that size, and a few bytes can set
+ * it (a constant 65536 x 65536 DWAB image fits in about 100 KB), so a
+ * caller with a budget checks it first: the fuzz harness does. */
+sg_status sg_exr_read_size(const char *path, int *width, int *height, sg_error *err);
+
 #ifdef __cplusplus
 }
 #endif

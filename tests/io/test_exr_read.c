@@ -158,6 +158,10 @@ static void test_exr_read_fixtures_roundtrip(void **state)
             fail_msg("%s: %s: %s", fx->name, sg_status_name(st), err.message);
         assert_int_equal(img.width, fx->w);
         assert_int_equal(img.height, fx->h);
+        int w = 0, h = 0;
+        assert_int_equal(sg_exr_read_size(path, &w, &h, &err), SG_OK);
+        assert_int_equal(w, fx->w);
+        assert_int_equal(h, fx->h);
         assert_int_equal(info.tiled, fx->tiled);
         assert_int_equal(info.half, fx->type == EXR_PIXEL_HALF);
         assert_int_equal(info.has_alpha, channel_index(fx, "A") >= 0);
@@ -348,6 +352,17 @@ static void test_exr_read_truncated_and_corrupt(void **state)
     char missing[600];
     snprintf(missing, sizeof missing, "%s/does_not_exist.exr", sg_test_tmpdir());
     read_fails(missing, "does_not_exist.exr", SG_ERR_IO, SG_ERR_IO);
+
+    /* The header-only size fails the same way, naming the file. */
+    int w = -1, h = -1;
+    sg_error err = {0};
+    assert_int_equal(sg_exr_read_size(missing, &w, &h, &err), SG_ERR_IO);
+    assert_non_null(strstr(err.message, "does_not_exist.exr: cannot open"));
+    assert_int_equal(sg_exr_read_size(sg_test_write_file("text.exr", "not an exr file at all\n", 23), &w, &h, &err),
+                     SG_ERR_CORRUPT);
+    assert_non_null(strstr(err.message, "text.exr: not an OpenEXR file"));
+    assert_int_equal(w, -1); /* untouched on failure */
+    assert_int_equal(h, -1);
 }
 
 /* A header claiming 20000 x 10000 pixels in a ~100 KB ZIP file: refused
@@ -382,6 +397,11 @@ static void test_exr_read_data_window_against_file_size(void **state)
     const char *path = sg_test_write_file("claims_20000x10000.exr", data, size);
     sg_image img = {0};
     sg_error err = {0};
+    /* The header alone states the size (what a caller with a budget checks). */
+    int w = 0, h = 0;
+    assert_int_equal(sg_exr_read_size(path, &w, &h, &err), SG_OK);
+    assert_int_equal(w, 20000);
+    assert_int_equal(h, 10000);
     sg_status st = sg_exr_read(path, &img, NULL, &err);
     if (st != SG_ERR_CORRUPT || !strstr(err.message, "claims_20000x10000.exr: data window 20000x10000 (zip "
                                                      "compression) needs at least") ||
@@ -391,9 +411,45 @@ static void test_exr_read_data_window_against_file_size(void **state)
     free(data);
 }
 
+/* A header attribute stating more bytes than the file has (the fuzzer's
+ * 514-byte file whose "type" string claimed 1.9 GB: OpenEXR allocated and
+ * read it for 11 s) is refused before the library parses the header,
+ * naming the attribute; so is one with a negative size. The int32 size
+ * follows "compression\0compression\0". */
+static void test_exr_read_attribute_size_against_file_size(void **state)
+{
+    (void)state;
+    static const fixture fx = {"attr_src.exr", 0, 0, 0, 8, 4, {"R", "G", "B"}, EXR_PIXEL_HALF,
+                               EXR_COMPRESSION_ZIP};
+    size_t size;
+    unsigned char *data = slurp(write_fixture(&fx), &size);
+    static const char key[] = "compression\0compression\0";
+    unsigned char *at = NULL;
+    for (size_t i = 0; i + sizeof key + 4 < size && !at; i++)
+        if (memcmp(data + i, key, sizeof key - 1) == 0)
+            at = data + i + sizeof key - 1;
+    assert_non_null(at);
+    static const int32_t sizes[2] = {1929379853, -5};
+    for (int k = 0; k < 2; k++) {
+        memcpy(at, &sizes[k], 4); /* little-endian host, as the file */
+        const char *path = sg_test_write_file("attr_bomb.exr", data, size);
+        sg_image img = {0};
+        sg_error err = {0};
+        sg_status st = sg_exr_read(path, &img, NULL, &err);
+        if (st != SG_ERR_CORRUPT || !strstr(err.message, "attr_bomb.exr: header attribute \"compression\" "
+                                                         "(compression) states"))
+            fail_msg("size %d: got %s \"%s\"", sizes[k], sg_status_name(st), err.message);
+        assert_null(img.data);
+        int w = -1, h = -1;
+        assert_int_equal(sg_exr_read_size(path, &w, &h, &err), SG_ERR_CORRUPT);
+    }
+    free(data);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exr_read_attribute_size_against_file_size),
         cmocka_unit_test(test_exr_read_data_window_against_file_size),
         cmocka_unit_test(test_exr_read_fixtures_roundtrip),
         cmocka_unit_test(test_exr_read_luminance_chroma),
