@@ -358,7 +358,7 @@ int main(int argc, char **argv)
     double t_world = omp_get_wtime() - t_start;
     size_t splats = 0, glossy = 0, models = sg_world_model_count(world);
     for (size_t m = 0; m < models; ++m) {
-        size_t n = sg_scene_points(sg_world_scene(world, (uint32_t)m))->count;
+        size_t n = sg_scene_sites(sg_world_scene(world, (uint32_t)m))->count;
         splats += n;
         glossy += sg_world_material(world, (uint32_t)m)->type == SG_MATERIAL_GGX ? n : 0;
     }
@@ -472,7 +472,7 @@ int main(int argc, char **argv)
         const uint16_t *gb;
         sg_bake_glossy_data(bake, (uint32_t)m, &res, &gc, &gs, &gn, &gb);
         printf("    model %-10zu %zu sample points of %zu splats", m, sg_bake_sample_count(bake, (uint32_t)m),
-               sg_scene_points(sg_world_scene(world, (uint32_t)m))->count);
+               sg_scene_sites(sg_world_scene(world, (uint32_t)m))->count);
         if (res)
             printf(", glossy bins %d x %d", res, res);
         printf("\n");

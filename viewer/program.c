@@ -151,7 +151,7 @@ sg_status sg_prog_bake_obtain(const sg_prog_bake *plan, const sg_scene_file *sf,
     if (plan->need) {
         uint64_t splats = 0, glossy = 0;
         for (size_t m = 0; m < sg_world_model_count(w); ++m) {
-            size_t n = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
+            size_t n = sg_scene_sites(sg_world_scene(w, (uint32_t)m))->count;
             splats += n;
             if (sg_world_material(w, (uint32_t)m)->type == SG_MATERIAL_GGX)
                 glossy += n;

@@ -22,11 +22,12 @@
  *      (glossy.h: their rays read E where they hit).
  *
  * Invariants:
- *  1. E[m] holds SG_BAKE_SPLAT_FLOATS floats per splat of model m (per side,
+ *  1. E[m] holds SG_BAKE_SPLAT_FLOATS floats per light site of model m
+ *     (sites.h: a splat of an MLS or disk surface) (per side,
  *     front then back: the visibility ratio RGB, then the indirect
- *     irradiance RGB), in the order of sg_scene_points(sg_world_scene(w,
+ *     irradiance RGB), in the order of sg_scene_sites(sg_world_scene(w,
  *     m)), finite and >= 0; e0 is the table of the world's envmap;
- *  2. the lookup's interpolation weights sum to 1 (sg_scene_hit_weights),
+ *  2. the lookup's interpolation weights sum to 1 (sg_scene_hit_sites),
  *     so a constant E is reproduced exactly: no seams between splats; the
  *     glossy blend uses the same weights, summed per sample point;
  *  3. gres[m] > 0 exactly when model m has bins; then gnear[m][i] <
@@ -360,9 +361,9 @@ static int lookup_weights(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, 
                           int *side)
 {
     const sg_scene *sc = sg_world_scene(w, h->model);
-    int n = sg_scene_hit_weights(sc, &h->hit, ids, wts, LOOKUP_SPLATS);
+    int n = sg_scene_hit_sites(sc, &h->hit, ids, wts, LOOKUP_SPLATS);
     *side = sg_v3_dot(wo, h->hit.n) < 0.0f;
-    const sg_pointset *ps = sg_scene_points(sc);
+    const sg_sites *ps = sg_scene_sites(sc);
     float kept = 0.0f;
     int k = 0;
     for (int j = 0; j < n; ++j) {
@@ -406,7 +407,7 @@ sg_vec3 sg_bake_splat_irradiance(const sg_bake *b, const sg_world *w, uint32_t m
     assert(m < b->models && splat < b->count[m] && (side == 0 || side == 1));
     uint32_t id = (uint32_t)splat;
     float one = 1.0f;
-    return irradiance_of(b, m, &id, &one, 1, side, sg_pointset_normal(sg_scene_points(sg_world_scene(w, m)), splat));
+    return irradiance_of(b, m, &id, &one, 1, side, sg_sites_normal(sg_scene_sites(sg_world_scene(w, m)), splat));
 }
 
 sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo)
@@ -445,11 +446,11 @@ sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *
         }
         sw[k] += wts[j];
     }
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, h->model));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, h->model));
     size_t stride = 3 * (size_t)res * (size_t)res;
     sg_vec3 S = {0, 0, 0};
     for (int k = 0; k < ns; ++k) {
-        sg_vec3 n_s = sg_pointset_normal(ps, b->gsplat[h->model][sid[k]]);
+        sg_vec3 n_s = sg_sites_normal(ps, b->gsplat[h->model][sid[k]]);
         S = sg_v3_add(S, sg_v3_scale(sg_glossy_eval(b->gbins[h->model] + sid[k] * stride, res, n_s, h->hit.n, wo),
                                      sw[k]));
     }

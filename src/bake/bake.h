@@ -19,7 +19,7 @@
  * Glossy (GGX) models also get directional bins of the lobe-filtered
  * incident radiance S(wo) at their sample points (bake/glossy.h). Looking
  * up a hit interpolates E over the splats around it with the surface's own
- * MLS weights (sg_scene_hit_weights), on the side the ray arrived from, so
+ * MLS weights (sg_scene_hit_sites), on the side the ray arrived from, so
  * the baked light is as smooth as the surface, and applies the material:
  *     Lambert:  L_o = emission + rho(x) / pi * E
  *     GGX:      L_o = emission + (1 - k) rho(x) / pi * E + k S(wo),
@@ -173,7 +173,7 @@ size_t sg_bake_model_count(const sg_bake *b);
 #define SG_BAKE_SPLAT_FLOATS 12
 
 /* Model m's light: SG_BAKE_SPLAT_FLOATS floats per splat (above), in the
- * order of sg_scene_points(sg_world_scene(w, m)); *splats gets the splat
+ * order of sg_scene_sites(sg_world_scene(w, m)); *splats gets the splat
  * count. Owned by the bake. m < sg_bake_model_count(b). */
 const float *sg_bake_light_data(const sg_bake *b, uint32_t m, size_t *splats);
 

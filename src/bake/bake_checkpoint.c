@@ -272,7 +272,7 @@ static sg_status load_sites(const sg_bake_file *f, const char *path, const sg_wo
     size_t models = sg_world_model_count(w);
     for (size_t h = 0; h < hits; ++h) {
         uint32_t hm = sd->hit_model[h] >> 1;
-        if (hm >= models || sd->hit_splat[h] >= sg_scene_points(sg_world_scene(w, hm))->count ||
+        if (hm >= models || sd->hit_splat[h] >= sg_scene_sites(sg_world_scene(w, hm))->count ||
             !(sd->hit_k[h] > 0.0f) || !isfinite(sd->hit_k[h]))
             return sg_error_set(err, SG_ERR_CORRUPT, "%s: model %zu, hit %zu: splat %" PRIu32 " of model %" PRIu32
                                                      ", weight %g: not in the scene or not a weight",

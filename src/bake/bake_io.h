@@ -24,7 +24,7 @@
  *   Emmm  F32 x 12n model mmm's light, SG_BAKE_SPLAT_FLOATS per splat (per
  *                   side: visibility ratio RGB, indirect irradiance RGB,
  *                   W/m^2; bake.h), in the
- *                   order of sg_scene_points(sg_world_scene(w, m)); mmm is
+ *                   order of sg_scene_sites(sg_world_scene(w, m)); mmm is
  *                   the model index in 3 upper-case hex digits: "E000",
  *                   "E001", ... "E00A"; at most SG_BAKE_IO_MAX_MODELS models
  *   for each model mmm with GRES > 0 (R = GRES, P = SCNT), after its Emmm:

@@ -69,7 +69,7 @@ static sg_status setup_models(sg_bake_job *j, sg_error *err)
     uint64_t key_base = 0;
     for (size_t m = 0; m < j->models; ++m) {
         sg_bake_job_model *x = &j->mw[m];
-        x->ps = sg_scene_points(sg_world_scene(j->w, (uint32_t)m));
+        x->ps = sg_scene_sites(sg_world_scene(j->w, (uint32_t)m));
         x->key_base = key_base;
         key_base += x->ps->count;
         const sg_material *mat = sg_world_material(j->w, (uint32_t)m);
@@ -88,11 +88,11 @@ static sg_status setup_models(sg_bake_job *j, sg_error *err)
             continue;
         if (!(x->e0 = sg_alloc_array(6 * x->ps->count, sizeof *x->e0)))
             return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu splats", x->ps->count);
-        const sg_pointset *ps = x->ps;
+        const sg_sites *ps = x->ps;
         float *out = x->e0;
 #pragma omp parallel for schedule(static) num_threads(threads)
         for (size_t i = 0; i < ps->count; ++i) {
-            sg_vec3 n = sg_pointset_normal(ps, i);
+            sg_vec3 n = sg_sites_normal(ps, i);
             sg_vec3 f = sg_irradiance_table_eval(e0, n), k = sg_irradiance_table_eval(e0, sg_v3_scale(n, -1.0f));
             float *o = out + 6 * i;
             o[0] = f.x, o[1] = f.y, o[2] = f.z, o[3] = k.x, o[4] = k.y, o[5] = k.z;
@@ -534,7 +534,7 @@ sg_status sg_bake_job__new(const sg_world *w, const sg_bake_desc *desc, sg_bake_
         goto fail;
     }
     for (size_t m = 0; m < j->models; ++m)
-        counts[m] = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
+        counts[m] = sg_scene_sites(sg_world_scene(w, (uint32_t)m))->count;
     if ((st = sg_bake__new(sg_world_envmap(w), j->models, counts, &d, NULL, &j->b, err)) != SG_OK)
         goto fail;
     if ((st = setup_models(j, err)) != SG_OK)

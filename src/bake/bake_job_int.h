@@ -23,7 +23,7 @@
 
 /* One model's part of the job. */
 typedef struct sg_bake_job_model {
-    const sg_pointset *ps;
+    const sg_sites *ps;
     float s0;            /* spacing of level 0; <= 0: every splat is a sample */
     int sampled;         /* the model has sample points                      */
     uint64_t key_base;   /* splats of the models before it: random streams   */

@@ -137,7 +137,7 @@ sg_status sg_glossy_bake(const sg_world *w, const sg_bake *b, uint32_t m, const 
     float c_env = (float)n_env / (float)rays, c_cos = (float)n_cos / (float)rays,
           c_ggx = (float)n_ggx / (float)rays / (float)nb;
     const sg_envmap *env = sg_world_envmap(w);
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, m));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, m));
     int nt = threads > 0 ? threads : omp_get_max_threads();
     size_t stride = 3 * (size_t)nb;
     int oom = 0; /* a thread could not get its scratch */
@@ -154,9 +154,9 @@ sg_status sg_glossy_bake(const sg_world *w, const sg_bake *b, uint32_t m, const 
             if (!acc || !fb)
                 continue; /* reported after the loop */
             uint32_t i = splats[s];
-            sg_vec3 nrm = sg_pointset_normal(ps, i), t, bt;
+            sg_vec3 nrm = sg_sites_normal(ps, i), t, bt;
             sg_v3_basis(nrm, &t, &bt);
-            sg_world_hit h = {.hit = {.t = 0.0f, .p = sg_pointset_position(ps, i), .n = nrm, .splat = i,
+            sg_world_hit h = {.hit = {.t = 0.0f, .p = sg_sites_position(ps, i), .n = nrm, .splat = i,
                                       .leaf = UINT32_MAX},
                               .model = m};
             uint64_t key = key_base + i;

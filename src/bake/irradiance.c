@@ -32,7 +32,7 @@ sg_status sg_irradiance_gather(const sg_world *w, const sg_photon_map *pm, const
         return sg_error_set(err, SG_ERR_NOMEM, "irradiance: out of memory");
     sg_status st = SG_OK;
     for (size_t m = 0; m < models; ++m) {
-        size_t n = sg_scene_points(sg_world_scene(w, (uint32_t)m))->count;
+        size_t n = sg_scene_sites(sg_world_scene(w, (uint32_t)m))->count;
         if (!(E[m] = sg_calloc_array(6 * n, sizeof(float)))) {
             st = sg_error_set(err, SG_ERR_NOMEM, "irradiance: out of memory for %zu splats", n);
             goto fail;
@@ -46,13 +46,13 @@ sg_status sg_irradiance_gather(const sg_world *w, const sg_photon_map *pm, const
         goto fail;
     int threads = d.threads > 0 ? d.threads : omp_get_max_threads();
     for (size_t m = 0; m < models; ++m) {
-        const sg_pointset *ps = sg_scene_points(sg_world_scene(w, (uint32_t)m));
+        const sg_sites *ps = sg_scene_sites(sg_world_scene(w, (uint32_t)m));
         float *Em = E[m];
 #pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
         for (size_t i = 0; i < ps->count; ++i) {
             uint32_t idx[MAX_K];
             float d2[MAX_K];
-            sg_vec3 x = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+            sg_vec3 x = sg_sites_position(ps, i), n = sg_sites_normal(ps, i);
             size_t found = sg_knn_query(tree, x, d.k, UINT32_MAX, idx, d2);
             if (found < 2)
                 continue;

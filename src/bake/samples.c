@@ -130,7 +130,7 @@ static int cmp_float(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-sg_status sg_samples_median_radius(const sg_pointset *ps, float *out, sg_error *err)
+sg_status sg_samples_median_radius(const sg_sites *ps, float *out, sg_error *err)
 {
     if (ps->count == 0) {
         *out = 0.0f;
@@ -172,7 +172,7 @@ static int set_reserve(sg_sample_set *set, size_t n)
     return 1;
 }
 
-sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos, const uint32_t *candidates,
+sg_status sg_samples_thin(const sg_sites *ps, float spacing, float normal_cos, const uint32_t *candidates,
                           size_t ncand, uint8_t level, sg_sample_set *set, sg_error *err)
 {
     if (!(spacing > 0.0f) || !isfinite(spacing))
@@ -186,19 +186,19 @@ sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for %zu candidates", ncand);
     }
     for (size_t j = 0; j < set->count; ++j)
-        grid_insert(&g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+        grid_insert(&g, (uint32_t)j, sg_sites_position(ps, set->splat[j]));
     float s2 = spacing * spacing;
     for (size_t c = 0; c < ncand; ++c) {
         uint32_t i = candidates ? candidates[c] : (uint32_t)c;
-        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+        sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i);
         uint32_t heads[27];
         grid_around(&g, p, heads);
         int near = 0;
         for (int k = 0; k < 27 && !near; ++k)
             for (uint32_t j = heads[k]; j != NONE && !near; j = g.next[j]) {
                 uint32_t sj = set->splat[j];
-                near = dist2(p, sg_pointset_position(ps, sj)) < s2 &&
-                       sg_v3_dot(n, sg_pointset_normal(ps, sj)) >= normal_cos;
+                near = dist2(p, sg_sites_position(ps, sj)) < s2 &&
+                       sg_v3_dot(n, sg_sites_normal(ps, sj)) >= normal_cos;
             }
         if (near)
             continue;
@@ -213,7 +213,7 @@ sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos
 
 static float level_spacing(float s0, uint8_t level) { return ldexpf(s0, -(int)level); }
 
-sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+sg_status sg_samples_mark_jumps(const sg_sites *ps, float s0, float normal_cos, const float *values,
                                 const float *sigma, float threshold, uint8_t level, const sg_sample_set *set,
                                 uint8_t *mark, sg_error *err)
 {
@@ -230,11 +230,11 @@ sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_co
     if (!grid_init(&g, 2.0f * sl, set->count))
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for refinement");
     for (size_t j = 0; j < set->count; ++j)
-        grid_insert(&g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+        grid_insert(&g, (uint32_t)j, sg_sites_position(ps, set->splat[j]));
     for (size_t j = 0; j < set->count; ++j) {
         if (set->level[j] != level || mark[j])
             continue;
-        sg_vec3 p = sg_pointset_position(ps, set->splat[j]), n = sg_pointset_normal(ps, set->splat[j]);
+        sg_vec3 p = sg_sites_position(ps, set->splat[j]), n = sg_sites_normal(ps, set->splat[j]);
         float yj = fmaxf(luminance(values + 3 * j), floor_y);
         uint32_t heads[27];
         grid_around(&g, p, heads);
@@ -242,8 +242,8 @@ sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_co
         for (int k = 0; k < 27 && !differs; ++k)
             for (uint32_t i = heads[k]; i != NONE && !differs; i = g.next[i]) {
                 uint32_t si = set->splat[i];
-                if (i == j || dist2(p, sg_pointset_position(ps, si)) > r2 ||
-                    sg_v3_dot(n, sg_pointset_normal(ps, si)) < normal_cos)
+                if (i == j || dist2(p, sg_sites_position(ps, si)) > r2 ||
+                    sg_v3_dot(n, sg_sites_normal(ps, si)) < normal_cos)
                     continue;
                 float yi = fmaxf(luminance(values + 3 * (size_t)i), floor_y), dy = fabsf(yi - yj);
                 differs = dy > threshold * fmaxf(yi, yj) &&
@@ -255,7 +255,7 @@ sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_co
     return SG_OK;
 }
 
-sg_status sg_samples_refine_marked(const sg_pointset *ps, float s0, float normal_cos, const uint8_t *mark,
+sg_status sg_samples_refine_marked(const sg_sites *ps, float s0, float normal_cos, const uint8_t *mark,
                                    uint8_t level, sg_sample_set *set, size_t *added, sg_error *err)
 {
     *added = 0;
@@ -280,18 +280,18 @@ sg_status sg_samples_refine_marked(const sg_pointset *ps, float s0, float normal
         goto done;
     }
     for (size_t k = 0; k < nmarked; ++k)
-        grid_insert(&gm, (uint32_t)k, sg_pointset_position(ps, set->splat[marked[k]]));
+        grid_insert(&gm, (uint32_t)k, sg_sites_position(ps, set->splat[marked[k]]));
     float sl2 = sl * sl;
     for (size_t i = 0; i < ps->count; ++i) {
-        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+        sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i);
         uint32_t heads[27];
         grid_around(&gm, p, heads);
         int near = 0;
         for (int k = 0; k < 27 && !near; ++k)
             for (uint32_t m = heads[k]; m != NONE && !near; m = gm.next[m]) {
                 uint32_t sm = set->splat[marked[m]];
-                near = dist2(p, sg_pointset_position(ps, sm)) <= sl2 &&
-                       sg_v3_dot(n, sg_pointset_normal(ps, sm)) >= normal_cos;
+                near = dist2(p, sg_sites_position(ps, sm)) <= sl2 &&
+                       sg_v3_dot(n, sg_sites_normal(ps, sm)) >= normal_cos;
             }
         if (near)
             cands[ncand++] = (uint32_t)i;
@@ -307,7 +307,7 @@ done:
     return st;
 }
 
-sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+sg_status sg_samples_refine(const sg_sites *ps, float s0, float normal_cos, const float *values,
                             const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
                             sg_error *err)
 {
@@ -329,34 +329,34 @@ static float wendland(float q)
     return a * a * a * a * (4.0f * q + 1.0f);
 }
 
-static int grid_of_samples(grid *g, const sg_pointset *ps, const sg_sample_set *set, float cell)
+static int grid_of_samples(grid *g, const sg_sites *ps, const sg_sample_set *set, float cell)
 {
     if (!grid_init(g, cell, set->count))
         return 0;
     for (size_t j = 0; j < set->count; ++j)
-        grid_insert(g, (uint32_t)j, sg_pointset_position(ps, set->splat[j]));
+        grid_insert(g, (uint32_t)j, sg_sites_position(ps, set->splat[j]));
     return 1;
 }
 
 /* Nearest sample to splat i among the 27 cells: same-facing preferred.
  * NONE when the cells hold no sample. */
-static uint32_t nearest_in_cells(const grid *g, const sg_pointset *ps, const sg_sample_set *set, size_t i,
+static uint32_t nearest_in_cells(const grid *g, const sg_sites *ps, const sg_sample_set *set, size_t i,
                                  float normal_cos)
 {
-    sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i);
+    sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i);
     uint32_t heads[27], best_f = NONE, best_a = NONE;
     float d_f = INFINITY, d_a = INFINITY;
     grid_around(g, p, heads);
     for (int k = 0; k < 27; ++k)
         for (uint32_t j = heads[k]; j != NONE; j = g->next[j]) {
             uint32_t sj = set->splat[j];
-            float d = dist2(p, sg_pointset_position(ps, sj));
+            float d = dist2(p, sg_sites_position(ps, sj));
             /* ties: the lower sample index, whatever the cell order */
             if (d < d_a || (d == d_a && j < best_a)) {
                 d_a = d;
                 best_a = j;
             }
-            if (sg_v3_dot(n, sg_pointset_normal(ps, sj)) >= normal_cos && (d < d_f || (d == d_f && j < best_f))) {
+            if (sg_v3_dot(n, sg_sites_normal(ps, sj)) >= normal_cos && (d < d_f || (d == d_f && j < best_f))) {
                 d_f = d;
                 best_f = j;
             }
@@ -366,13 +366,13 @@ static uint32_t nearest_in_cells(const grid *g, const sg_pointset *ps, const sg_
 
 /* Linear scan: the nearest sample of all (a splat far from every
  * sample, which thinning over all splats never leaves). */
-static uint32_t nearest_anywhere(const sg_pointset *ps, const sg_sample_set *set, size_t i)
+static uint32_t nearest_anywhere(const sg_sites *ps, const sg_sample_set *set, size_t i)
 {
-    sg_vec3 p = sg_pointset_position(ps, i);
+    sg_vec3 p = sg_sites_position(ps, i);
     uint32_t best = 0;
     float bd = INFINITY;
     for (size_t j = 0; j < set->count; ++j) {
-        float d = dist2(p, sg_pointset_position(ps, set->splat[j]));
+        float d = dist2(p, sg_sites_position(ps, set->splat[j]));
         if (d < bd) {
             bd = d;
             best = (uint32_t)j;
@@ -381,13 +381,13 @@ static uint32_t nearest_anywhere(const sg_pointset *ps, const sg_sample_set *set
     return best;
 }
 
-sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+sg_status sg_samples_interpolate(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err)
 {
     return sg_samples_interpolate_n(ps, set, s0, support, normal_cos, values, 3, threads, out, err);
 }
 
-sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                    float normal_cos, const float *values, int channels, int threads, float *out,
                                    sg_error *err)
 {
@@ -405,7 +405,7 @@ sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *s
     int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
     for (size_t i = 0; i < ps->count; ++i) {
-        sg_vec3 p = sg_pointset_position(ps, i), n = sg_pointset_normal(ps, i), t, bt;
+        sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i), t, bt;
         sg_v3_basis(n, &t, &bt);
         uint32_t heads[27];
         grid_around(&g, p, heads);
@@ -428,9 +428,9 @@ sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *s
             for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
                 uint32_t sj = set->splat[j];
                 float r = support * level_spacing(s0, set->level[j]);
-                sg_vec3 dp = sg_v3_sub(sg_pointset_position(ps, sj), p);
+                sg_vec3 dp = sg_v3_sub(sg_sites_position(ps, sj), p);
                 float d2 = sg_v3_dot(dp, dp);
-                if (d2 >= r * r || sg_v3_dot(n, sg_pointset_normal(ps, sj)) < normal_cos)
+                if (d2 >= r * r || sg_v3_dot(n, sg_sites_normal(ps, sj)) < normal_cos)
                     continue;
                 /* Finer samples count 4^level more: they were added where
                  * the light changes faster than the coarse ones resolve. */
@@ -479,7 +479,7 @@ sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *s
     return SG_OK;
 }
 
-sg_status sg_samples_nearest(const sg_pointset *ps, const sg_sample_set *set, float s0, float normal_cos,
+sg_status sg_samples_nearest(const sg_sites *ps, const sg_sample_set *set, float s0, float normal_cos,
                              int threads, uint32_t *out, sg_error *err)
 {
     if (set->count == 0)

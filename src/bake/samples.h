@@ -1,7 +1,8 @@
 /* samples.h — sample points of the bake: a deterministic subset of a
- * model's splats at which the expensive estimates (direct light by shadow
- * rays, glossy bins) are computed, and the interpolation back to every
- * splat.
+ * model's light sites (surface/sites.h; the splats of MLS and disk
+ * surfaces, so "splat" below means site) at which the expensive estimates
+ * (direct light by shadow rays, glossy bins) are computed, and the
+ * interpolation back to every site.
  *
  * What it does:
  *  - thinning (sg_samples_thin): visits candidate splats in a fixed order
@@ -41,7 +42,7 @@
 
 #include "core/error.h"
 #include "material/bsdf.h"
-#include "points/pointset.h"
+#include "surface/sites.h"
 
 #define SG_SAMPLES_MAX_LEVEL 8
 #define SG_SAMPLES_MAX_CHANNELS 12 /* values per sample of sg_samples_interpolate_n */
@@ -56,7 +57,7 @@ typedef struct sg_sample_set {
 void sg_sample_set_free(sg_sample_set *set);
 
 /* Median of ps->radius (0 for an empty set). SG_ERR_NOMEM only. */
-sg_status sg_samples_median_radius(const sg_pointset *ps, float *out, sg_error *err);
+sg_status sg_samples_median_radius(const sg_sites *ps, float *out, sg_error *err);
 
 /* Default spacing of a material's sample points, as a multiple of the
  * model's median splat radius: 4 for a diffuse (Lambert, or specular 0)
@@ -68,7 +69,7 @@ float sg_samples_default_spacing(const sg_material *m);
  * order; NULL: every splat in index order, ncand ignored) that keep every
  * pair of same-facing samples at least `spacing` apart, counting the
  * samples already in set. New samples get level `level`. spacing > 0. */
-sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos, const uint32_t *candidates,
+sg_status sg_samples_thin(const sg_sites *ps, float spacing, float normal_cos, const uint32_t *candidates,
                           size_t ncand, uint8_t level, sg_sample_set *set, sg_error *err);
 
 /* One refinement step. values: 3 floats (RGB) per sample of set; sigma
@@ -81,7 +82,7 @@ sg_status sg_samples_thin(const sg_pointset *ps, float spacing, float normal_cos
  * thinned at half its spacing (level + 1) into set; *added gets the
  * number of new samples (indices [old count, set->count)). s0: spacing of
  * level 0. */
-sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+sg_status sg_samples_refine(const sg_sites *ps, float s0, float normal_cos, const float *values,
                             const float *sigma, float threshold, uint8_t level, sg_sample_set *set, size_t *added,
                             sg_error *err);
 
@@ -91,29 +92,29 @@ sg_status sg_samples_refine(const sg_pointset *ps, float s0, float normal_cos, c
  * (marks already set stay set; mark has set->count entries); refine_marked
  * thins the splats within one spacing of the marked samples of level
  * `level` at half that spacing into set. */
-sg_status sg_samples_mark_jumps(const sg_pointset *ps, float s0, float normal_cos, const float *values,
+sg_status sg_samples_mark_jumps(const sg_sites *ps, float s0, float normal_cos, const float *values,
                                 const float *sigma, float threshold, uint8_t level, const sg_sample_set *set,
                                 uint8_t *mark, sg_error *err);
-sg_status sg_samples_refine_marked(const sg_pointset *ps, float s0, float normal_cos, const uint8_t *mark,
+sg_status sg_samples_refine_marked(const sg_sites *ps, float s0, float normal_cos, const uint8_t *mark,
                                    uint8_t level, sg_sample_set *set, size_t *added, sg_error *err);
 
 /* out: 3 floats per splat, interpolated from values (3 floats per sample)
  * as described above (a constant is reproduced exactly, a linear
  * function of the tangent-plane position too where the samples span it); support: kernel radius as a multiple of a sample's
  * spacing (e.g. 2). Deterministic. */
-sg_status sg_samples_interpolate(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+sg_status sg_samples_interpolate(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err);
 
 /* The same for `channels` values per sample (1..SG_SAMPLES_MAX_CHANNELS),
  * each interpolated on its own with the same weights: out gets channels
  * floats per splat. */
-sg_status sg_samples_interpolate_n(const sg_pointset *ps, const sg_sample_set *set, float s0, float support,
+sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                    float normal_cos, const float *values, int channels, int threads, float *out,
                                    sg_error *err);
 
 /* out: per splat, the index into set of its nearest same-facing sample
  * (nearest of any facing when none faces its way within 2 s0). */
-sg_status sg_samples_nearest(const sg_pointset *ps, const sg_sample_set *set, float s0, float normal_cos,
+sg_status sg_samples_nearest(const sg_sites *ps, const sg_sample_set *set, float s0, float normal_cos,
                              int threads, uint32_t *out, sg_error *err);
 
 #endif

@@ -174,8 +174,8 @@ static float power_weight(float own, float other)
 static sg_world_hit site_on_surface(const sg_world *w, uint32_t m, uint32_t splat)
 {
     const sg_scene *sc = sg_world_scene(w, m);
-    const sg_pointset *ps = sg_scene_points(sc);
-    sg_vec3 p = sg_pointset_position(ps, splat), n = sg_pointset_normal(ps, splat);
+    const sg_sites *ps = sg_scene_sites(sc);
+    sg_vec3 p = sg_sites_position(ps, splat), n = sg_sites_normal(ps, splat);
     float r = ps->radius[splat];
     sg_world_hit self = {.hit = {.t = 0.0f, .p = p, .n = n, .splat = splat, .leaf = UINT32_MAX}, .model = m};
     sg_ray down = {.org = sg_v3_madd(p, n, r), .dir = sg_v3_scale(n, -1.0f), .tmin = 0.0f, .tmax = 2.0f * r,

@@ -67,7 +67,7 @@ typedef struct sg_hit {
     sg_vec3 p;      /* hit position, world space                         */
     sg_vec3 n;      /* smooth unit surface normal (the model's outward side) */
     uint32_t splat; /* splat with the largest weight at p; SG_INVALID_ID = miss */
-    uint32_t leaf;  /* kd-tree leaf holding p (for sg_scene_hit_weights)  */
+    uint32_t leaf;  /* kd-tree leaf holding p (for sg_scene_hit_sites)  */
 } sg_hit;
 
 /* Counters a traversal adds to (once per ray, not per step). The paper's

@@ -36,15 +36,12 @@ typedef struct tile_stats {
 /* The desc with defaults filled in and the light normalised. */
 typedef struct frame {
     const sg_scene *scene;
-    const sg_pointset *points; /* the scene's splats, for albedo          */
     sg_render_desc d;
 } frame;
 
 static sg_vec3 albedo_of(const frame *f, const sg_hit *h)
 {
-    const sg_pointset *p = f->points;
-    assert(h->splat < p->count);
-    return sg_v3(p->ar[h->splat], p->ag[h->splat], p->ab[h->splat]);
+    return sg_scene_hit_albedo(f->scene, h);
 }
 
 /* Sky radiance along dir: the sky colour, lighter towards the horizon. */
@@ -173,7 +170,7 @@ sg_status sg_render_frame(const sg_scene *scene, const sg_render_desc *desc, sg_
 {
     if (!scene || !desc || !out)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "render: scene, desc and image are required");
-    frame f = {.scene = scene, .points = sg_scene_points(scene)};
+    frame f = {.scene = scene};
     sg_status st = fill_defaults(desc, &f.d, err);
     if (st != SG_OK)
         return st;

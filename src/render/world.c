@@ -414,10 +414,7 @@ const sg_material *sg_world_material(const sg_world *w, uint32_t model) { return
 
 sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h)
 {
-    const sg_pointset *ps = sg_scene_points(w->scenes[h->model]);
-    uint32_t i = h->hit.splat;
-    sg_vec3 point = i < ps->count ? sg_v3(ps->ar[i], ps->ag[i], ps->ab[i]) : sg_v3(1, 1, 1);
-    return sg_material_albedo(&w->materials[h->model], point);
+    return sg_material_albedo(&w->materials[h->model], sg_scene_hit_albedo(w->scenes[h->model], &h->hit));
 }
 
 const sg_envmap *sg_world_envmap(const sg_world *w) { return w->env; }

@@ -38,6 +38,7 @@ enum { STACK_SIZE = 128 };
 struct sg_scene {
     sg_scene_desc desc;   /* with defaults filled in                        */
     sg_pointset points;   /* own copy of the input                          */
+    sg_sites sites;       /* the light sites: a view of the splats          */
     sg_kdtree tree;
     sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
     sg_mls_params mls;
@@ -230,6 +231,7 @@ sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, 
     sc->desc = d;
     if ((st = sg_pointset_append(&sc->points, points, err)) != SG_OK)
         goto fail;
+    sc->sites = sg_sites_of_pointset(&sc->points);
     size_t n = points->count;
     for (int k = 0; k < 6; ++k)
         if (!(box[k] = sg_alloc_array(n, sizeof(float)))) {
@@ -436,17 +438,26 @@ static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, flo
     return n;
 }
 
-int sg_scene_hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+int sg_scene_hit_sites(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
     return hit_weights(sc, hit, ids, weights, max, 1);
 }
 
-int sg_scene_hit_weights_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
+int sg_scene_hit_sites_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
     return hit_weights(sc, hit, ids, weights, max, 0);
 }
 
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
+
+const sg_sites *sg_scene_sites(const sg_scene *sc) { return &sc->sites; }
+
+sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
+{
+    const sg_pointset *p = &sc->points;
+    uint32_t i = hit->splat;
+    return i < p->count ? sg_v3(p->ar[i], p->ag[i], p->ab[i]) : sg_v3(1.0f, 1.0f, 1.0f);
+}
 
 void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
 

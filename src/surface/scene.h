@@ -37,6 +37,7 @@
 #include "core/error.h"
 #include "math/ray.h"
 #include "points/pointset.h"
+#include "surface/sites.h"
 
 typedef struct sg_scene sg_scene; /* opaque */
 
@@ -117,23 +118,37 @@ unsigned sg_scene_intersect4(const sg_scene *scene, const sg_ray rays[4], unsign
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays). */
 int sg_scene_occluded(const sg_scene *scene, const sg_ray *ray, sg_ray_stats *stats);
 
-/* The splats around a hit and their normalised interpolation weights
- * w_i = K(|p - p_i| / r_i) / sum (the scene's MLS kernel, for both surface
- * models), from the leaf the hit was found in: that leaf holds every splat
- * whose support covers p, so the weights are those of the smooth surface.
- * Writes at most max entries (the largest weights) and returns the count;
- * falls back to the hit's dominant splat with weight 1. Use it to
- * interpolate per-splat data (baked light) without seams. */
-int sg_scene_hit_weights(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
+/* Light sites (sites.h): where a bake stores light on this surface. For
+ * MLS and disk surfaces they are the splats, site i = splat i. The view
+ * lives as long as the scene. */
+const sg_sites *sg_scene_sites(const sg_scene *scene);
 
-/* The scalar reference of sg_scene_hit_weights: every splat of the leaf
- * weighed, where sg_scene_hit_weights first drops, 8 at a time, the splats
+/* The sites around a hit and their normalised interpolation weights,
+ * summing to 1 and continuous across neighbouring hits, so per-site data
+ * (baked light) interpolates without seams. MLS and disks: the splats with
+ * w_i = K(|p - p_i| / r_i) / sum (the scene's MLS kernel), from the leaf
+ * the hit was found in: that leaf holds every splat whose support covers
+ * p, so the weights are those of the smooth surface. Writes at most max
+ * entries (the largest weights) and returns the count; falls back to the
+ * hit's dominant splat with weight 1. */
+int sg_scene_hit_sites(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
+
+/* The scalar reference of sg_scene_hit_sites: every splat of the leaf
+ * weighed, where sg_scene_hit_sites first drops, 8 at a time, the splats
  * whose squared distance ratio is clearly >= 1. Same result bit for bit
  * (tested); for tests. */
-int sg_scene_hit_weights_reference(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights,
-                                   int max);
+int sg_scene_hit_sites_reference(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights,
+                                 int max);
 
-/* The pointset the scene was built from (its own copy), for albedo lookups. */
+/* The albedo the model's points give a hit (its splat's, linear RGB);
+ * (1, 1, 1) for a hit that names no splat. Material inputs come from here,
+ * never from the point set directly. */
+sg_vec3 sg_scene_hit_albedo(const sg_scene *scene, const sg_hit *hit);
+
+/* The point set the scene was built from (its own copy): for tools that
+ * measure the reconstruction against its input (tests, benchmarks, the
+ * stability map). The bake, the viewer and the reference use sites and
+ * hits only. */
 const sg_pointset *sg_scene_points(const sg_scene *scene);
 
 void sg_scene_get_info(const sg_scene *scene, sg_scene_info *info);

@@ -211,9 +211,9 @@ static void test_bake_envmap_intensity_and_rotation(void **state)
         sg_bake *b = bake(w, 100000, 4, 32);
         size_t n;
         sg_bake_light_data(b, 0, &n);
-        const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+        const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
         for (size_t i = 0; i < n; ++i) {
-            sg_vec3 nrm = sg_pointset_normal(ps, i);
+            sg_vec3 nrm = sg_sites_normal(ps, i);
             double e = sg_bake_splat_irradiance(b, w, 0, i, 0).y;
             sum[c] += e;
             vx[c] += e * nrm.x;
@@ -439,10 +439,10 @@ static void test_bake_glossy_white_furnace_and_lookup(void **state)
      * interpolation of the lobe and the half floats); reading each point's
      * map at wo itself instead of the reflection-preserving wo' shifts the
      * lobe by up to twice the normals' difference: 0.023. */
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     sg_vec3 l = sg_v3_normalize(sg_v3(0.3f, 0.8f, 0.5f));
     for (size_t p = 0; p < n; ++p) {
-        sg_vec3 np = sg_pointset_normal(ps, splat[p]), t, bt;
+        sg_vec3 np = sg_sites_normal(ps, splat[p]), t, bt;
         sg_v3_basis(np, &t, &bt);
         for (int j = 0; j < res; ++j)
             for (int i = 0; i < res; ++i) {

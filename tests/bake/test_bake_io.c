@@ -267,7 +267,7 @@ static void test_bake_io_splat_count_mismatch(void **state)
 {
     (void)state;
     sg_world *w = small_world(2000), *w2 = small_world(2100);
-    size_t have = sg_scene_points(sg_world_scene(w, 0))->count, want = sg_scene_points(sg_world_scene(w2, 0))->count;
+    size_t have = sg_scene_sites(sg_world_scene(w, 0))->count, want = sg_scene_sites(sg_world_scene(w2, 0))->count;
     assert_true(have != want);
     sg_bake *b = make_bake(w, 8192);
     const char *path = tmp_path("count.sgbake");

@@ -23,19 +23,19 @@
 
 static const float COS = 0.7f;
 
-static float d2(const sg_pointset *ps, size_t a, size_t b)
+static float d2(const sg_sites *ps, size_t a, size_t b)
 {
-    sg_vec3 d = sg_v3_sub(sg_pointset_position(ps, a), sg_pointset_position(ps, b));
+    sg_vec3 d = sg_v3_sub(sg_sites_position(ps, a), sg_sites_position(ps, b));
     return sg_v3_dot(d, d);
 }
 
-static int same_facing(const sg_pointset *ps, size_t a, size_t b)
+static int same_facing(const sg_sites *ps, size_t a, size_t b)
 {
-    return sg_v3_dot(sg_pointset_normal(ps, a), sg_pointset_normal(ps, b)) >= COS;
+    return sg_v3_dot(sg_sites_normal(ps, a), sg_sites_normal(ps, b)) >= COS;
 }
 
 /* Invariants 1 and 2 of samples.c by brute force over all pairs. */
-static void check_spacing_and_coverage(const sg_pointset *ps, const sg_sample_set *set, float s)
+static void check_spacing_and_coverage(const sg_sites *ps, const sg_sample_set *set, float s)
 {
     for (size_t a = 0; a < set->count; ++a)
         for (size_t b = a + 1; b < set->count; ++b)
@@ -55,7 +55,7 @@ static void check_spacing_and_coverage(const sg_pointset *ps, const sg_sample_se
  * every test below shares. */
 typedef struct thinned {
     sg_world *w;
-    const sg_pointset *ps;
+    const sg_sites *ps;
     float med, s;
     sg_sample_set set;
 } thinned;
@@ -65,7 +65,7 @@ static thinned thin_builtin(const char *builtin, int points, float radii)
     char json[128];
     snprintf(json, sizeof json, "{\"models\":[{\"builtin\":\"%s\",\"points\":%d}]}", builtin, points);
     thinned t = {.w = sg_test_world_from_json(json)};
-    t.ps = sg_scene_points(sg_world_scene(t.w, 0));
+    t.ps = sg_scene_sites(sg_world_scene(t.w, 0));
     assert_int_equal(sg_samples_median_radius(t.ps, &t.med, NULL), SG_OK);
     assert_true(t.med > 0.0f);
     t.s = radii * t.med;
@@ -83,7 +83,7 @@ static void test_samples_thin_spacing_coverage_determinism(void **state)
 {
     (void)state;
     thinned t = thin_builtin("sphere", 12000, 4.0f);
-    const sg_pointset *ps = t.ps;
+    const sg_sites *ps = t.ps;
     const sg_sample_set *a = &t.set;
     float med = t.med, s = t.s;
     sg_sample_set b = {0};
@@ -105,7 +105,7 @@ static void test_samples_refine_follows_a_step(void **state)
 {
     (void)state;
     thinned t = thin_builtin("ground", 20000, 4.0f);
-    const sg_pointset *ps = t.ps;
+    const sg_sites *ps = t.ps;
     sg_sample_set *set = &t.set;
     float s = t.s;
     size_t n0 = set->count;
@@ -155,7 +155,7 @@ static void test_samples_interpolate(void **state)
 {
     (void)state;
     thinned t = thin_builtin("ground", 20000, 4.0f);
-    const sg_pointset *ps = t.ps;
+    const sg_sites *ps = t.ps;
     sg_sample_set *set = &t.set;
     float s = t.s;
     float *v = sg_alloc_array(3 * set->count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
@@ -208,7 +208,7 @@ static void test_samples_nearest(void **state)
 {
     (void)state;
     thinned t = thin_builtin("sphere", 6000, 3.0f);
-    const sg_pointset *ps = t.ps;
+    const sg_sites *ps = t.ps;
     sg_sample_set *set = &t.set;
     float s = t.s;
     uint32_t *near = sg_alloc_array(ps->count, sizeof *near);

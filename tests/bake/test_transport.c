@@ -26,7 +26,7 @@
 #include "render/world.h"
 
 
-static sg_sample_set every_splat(const sg_pointset *ps, size_t n)
+static sg_sample_set every_splat(const sg_sites *ps, size_t n)
 {
     sg_sample_set set = {0};
     set.splat = test_malloc(n * sizeof *set.splat);
@@ -53,7 +53,7 @@ static void test_transport_unshadowed_estimate_unbiased(void **state)
     (void)state;
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":4096}],"
                                           "\"envmap\":{\"builtin\":\"sunsky\"}}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     sg_sample_set set = every_splat(ps, 256);
     sg_site_data sd = {0};
     sg_transport_desc td = {.env_rays = 16, .cos_rays = 16, .seed = 3};
@@ -89,7 +89,7 @@ static void test_transport_sites_independent(void **state)
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":4000,"
                                           "\"transform\":{\"translate\":[0,1,0]}},{\"builtin\":\"ground\","
                                           "\"points\":4000}],\"envmap\":{\"builtin\":\"sky\"}}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     sg_sample_set set = every_splat(ps, 100);
     sg_transport_desc td = {.env_rays = 8, .cos_rays = 8, .seed = 9, .threads = 1};
     sg_site_data a = {0}, b = {0};
@@ -129,7 +129,7 @@ static void test_transport_inside_closed_model(void **state)
     (void)state;
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":6000}],"
                                           "\"envmap\":{\"builtin\":\"sky\"}}");
-    const sg_pointset *ps = sg_scene_points(sg_world_scene(w, 0));
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     sg_sample_set set = every_splat(ps, 200);
     sg_transport_desc td = {.env_rays = 32, .cos_rays = 64, .seed = 4};
     sg_site_data sd = {0};

@@ -445,7 +445,7 @@ static void test_mls_simd_matches_scalar(void **state)
     }
 }
 
-/* sg_scene_hit_weights (SIMD pre-filter) gives its scalar reference's
+/* sg_scene_hit_sites (SIMD pre-filter) gives its scalar reference's
  * result bit for bit: same count, ids and weights, at hits from random
  * rays and at points pushed off the hit so that splats sit right at the
  * edge of their support (where the pre-filter's slack matters), with a
@@ -472,8 +472,8 @@ static void check_hit_weights(sg_surface_model model, sg_kernel kernel)
                 q.p = sg_v3_add(q.p, sg_v3_scale(random_dir(&rng), 2.0f * h * sg_test_rand01(&rng)));
             uint32_t ida[MAXW], idb[MAXW];
             float wa[MAXW], wb[MAXW];
-            int na = sg_scene_hit_weights(s, &q, ida, wa, max);
-            int nb = sg_scene_hit_weights_reference(s, &q, idb, wb, max);
+            int na = sg_scene_hit_sites(s, &q, ida, wa, max);
+            int nb = sg_scene_hit_sites_reference(s, &q, idb, wb, max);
             many += na == max;
             int same = na == nb;
             for (int j = 0; same && j < na; ++j)
