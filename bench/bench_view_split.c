@@ -10,8 +10,8 @@
  * Every STRIDE-th key of PATH.txt (a campath file) is rendered by each
  * phase in turn:
  *   isect    one primary ray per pixel, sg_world_intersect only;
- *   weights  the same plus sg_scene_hit_weights (the bake lookup's gather);
- *   weights_ref  the same with sg_scene_hit_weights_reference (scalar);
+ *   weights  the same plus sg_scene_hit_sites (the bake lookup's gather);
+ *   weights_ref  the same with sg_scene_hit_sites_reference (scalar);
  *   bake     sg_bake_render (the frame as bake.c makes it);
  *   view     sg_view_render (view/render.h; the viewer's frame);
  *   display  sg_display_apply of the frame to RGBA8;
@@ -87,8 +87,8 @@ static double primary_pass(const sg_world *w, const sg_camera *cam, int width, i
                     uint32_t ids[LOOKUP];
                     float wts[LOOKUP];
                     int n = with_weights == 2
-                                ? sg_scene_hit_weights_reference(sg_world_scene(w, h.model), &h.hit, ids, wts, LOOKUP)
-                                : sg_scene_hit_weights(sg_world_scene(w, h.model), &h.hit, ids, wts, LOOKUP);
+                                ? sg_scene_hit_sites_reference(sg_world_scene(w, h.model), &h.hit, ids, wts, LOOKUP)
+                                : sg_scene_hit_sites(sg_world_scene(w, h.model), &h.hit, ids, wts, LOOKUP);
                     acc += wts[n - 1];
                 }
             }

@@ -229,7 +229,7 @@ static int trace_ray(const sg_world *w, const sg_world_hit *self, sg_vec3 ns, sg
     r->t = 0.0f;
     if (sg_world_intersect(w, &ray, &h, NULL)) {
         r->t = h.hit.t > 0.0f ? h.hit.t : FLT_MIN;
-        r->splat = h.hit.splat;
+        r->splat = sg_scene_hit_site(sg_world_scene(w, h.model), &h.hit);
         r->model = h.model << 1 | (uint32_t)(sg_v3_dot(wi, h.hit.n) > 0.0f); /* y's back side */
     }
     return 1;
@@ -488,8 +488,7 @@ sg_status sg_transport_solve(const sg_world *w, const sg_transport_model *models
             uint32_t hm = sd->hit_model[h] >> 1, side = sd->hit_model[h] & 1u, splat = sd->hit_splat[h];
             float k = sd->hit_k[h];
             const sg_material *mat = sg_world_material(w, hm);
-            sg_world_hit wh = {.hit = {.splat = splat}, .model = hm};
-            sg_vec3 R = sg_transport_reflectance(mat, sg_world_albedo(w, &wh));
+            sg_vec3 R = sg_transport_reflectance(mat, sg_world_site_albedo(w, hm, splat));
             const sg_transport_model *tm = &models[hm];
             uint32_t t = tm->nearest[splat];
             const float *D = tm->sites->ratio + 6 * (size_t)t + 3 * side;

@@ -52,6 +52,11 @@ typedef struct sg_ray {
     uint32_t flags; /* sg_ray_flags                                       */
     sg_vec3 self_n; /* normal of the surface the ray leaves (spawned rays) */
     float self_r;   /* its splat radius; 0: no self test (primary rays)    */
+    float spread;   /* footprint: the ray's cone is spread * t wide at t
+                       (a camera ray: its pixel's angle); 0: a thin ray.
+                       A surface with levels of detail may stop at the
+                       level whose cells are below that width; MLS and
+                       disks ignore it (DESIGN.md, "one interface")     */
 } sg_ray;
 
 /* Whether a crossing at t with unit normal n is the ray's own surface. */

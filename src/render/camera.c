@@ -54,12 +54,16 @@ sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int he
     sg_vec3 d = cam->forward;
     d = sg_v3_madd(d, cam->right, sx * cam->tan_half_fov * cam->aspect);
     d = sg_v3_madd(d, cam->up, sy * cam->tan_half_fov);
+    /* The pixel is 2 tan(fov/2) / height wide on the image plane at unit
+     * forward distance, which the ray reaches after |d|. */
+    float len = sg_v3_length(d);
     sg_ray ray = {
         .org = cam->eye,
-        .dir = sg_v3_normalize(d),
+        .dir = sg_v3_scale(d, 1.0f / len),
         .tmin = 0.0f,
         .tmax = INFINITY,
         .flags = SG_RAY_ANY_FACE,
+        .spread = 2.0f * cam->tan_half_fov / ((float)height * len),
     };
     return ray;
 }

@@ -38,7 +38,8 @@ sg_status sg_camera_look_at(sg_vec3 eye, sg_vec3 look, sg_vec3 up, float vfov_de
 
 /* Primary ray through image-plane point (px, py) of a width x height image
  * (see the header note for the coordinates): origin at the eye, unit
- * direction, [tmin, tmax] = [0, INFINITY], SG_RAY_ANY_FACE. */
+ * direction, [tmin, tmax] = [0, INFINITY], SG_RAY_ANY_FACE, spread = the
+ * pixel's angular width (its footprint for levels of detail). */
 sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int height);
 
 /* A camera looking along view_dir (need not be unit) at the centre of

@@ -417,6 +417,13 @@ sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h)
     return sg_material_albedo(&w->materials[h->model], sg_scene_hit_albedo(w->scenes[h->model], &h->hit));
 }
 
+sg_vec3 sg_world_site_albedo(const sg_world *w, uint32_t model, uint32_t site)
+{
+    const sg_sites *s = sg_scene_sites(w->scenes[model]);
+    sg_vec3 point = site < s->count ? sg_v3(s->ar[site], s->ag[site], s->ab[site]) : sg_v3(1, 1, 1);
+    return sg_material_albedo(&w->materials[model], point);
+}
+
 const sg_envmap *sg_world_envmap(const sg_world *w) { return w->env; }
 size_t sg_world_model_count(const sg_world *w) { return w->count; }
 const sg_scene *sg_world_scene(const sg_world *w, uint32_t model) { return w->scenes[model]; }

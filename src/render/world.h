@@ -89,6 +89,9 @@ const sg_material *sg_world_material(const sg_world *w, uint32_t model);
  * colour where the material uses point colours (sg_material_albedo). */
 sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h);
 
+/* The same at light site `site` of model `model` (surface/sites.h). */
+sg_vec3 sg_world_site_albedo(const sg_world *w, uint32_t model, uint32_t site);
+
 const sg_envmap *sg_world_envmap(const sg_world *w);
 
 size_t sg_world_model_count(const sg_world *w);

@@ -452,6 +452,12 @@ const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
 
 const sg_sites *sg_scene_sites(const sg_scene *sc) { return &sc->sites; }
 
+uint32_t sg_scene_hit_site(const sg_scene *sc, const sg_hit *hit)
+{
+    (void)sc;
+    return hit->splat;
+}
+
 sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
 {
     const sg_pointset *p = &sc->points;

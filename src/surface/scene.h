@@ -133,6 +133,11 @@ const sg_sites *sg_scene_sites(const sg_scene *scene);
  * hit's dominant splat with weight 1. */
 int sg_scene_hit_sites(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
 
+/* The hit's dominant site: the one with the largest weight (MLS and
+ * disks: hit->splat). Per-site data of what a ray hit (a bake's transport
+ * rows) is indexed by it. */
+uint32_t sg_scene_hit_site(const sg_scene *scene, const sg_hit *hit);
+
 /* The scalar reference of sg_scene_hit_sites: every splat of the leaf
  * weighed, where sg_scene_hit_sites first drops, 8 at a time, the splats
  * whose squared distance ratio is clearly >= 1. Same result bit for bit

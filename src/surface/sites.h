@@ -28,6 +28,8 @@ typedef struct sg_sites {
     const float *px, *py, *pz; /* positions, world space     */
     const float *nx, *ny, *nz; /* unit normals (front side)  */
     const float *radius;       /* reach, > 0                 */
+    const float *ar, *ag, *ab; /* the points' colour there (linear RGB): the
+                                  material input of light arriving at it */
 } sg_sites;
 
 static inline sg_vec3 sg_sites_position(const sg_sites *s, size_t i)
@@ -44,7 +46,8 @@ static inline sg_vec3 sg_sites_normal(const sg_sites *s, size_t i)
 static inline sg_sites sg_sites_of_pointset(const sg_pointset *ps)
 {
     return (sg_sites){.count = ps->count, .px = ps->px, .py = ps->py, .pz = ps->pz,
-                      .nx = ps->nx, .ny = ps->ny, .nz = ps->nz, .radius = ps->radius};
+                      .nx = ps->nx, .ny = ps->ny, .nz = ps->nz, .radius = ps->radius,
+                      .ar = ps->ar, .ag = ps->ag, .ab = ps->ab};
 }
 
 #endif

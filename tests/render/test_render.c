@@ -149,6 +149,14 @@ static void test_render_camera_centre_ray(void **state)
     sg_ray tl = sg_camera_ray(&cam, 0.5f, 0.5f, w, h);
     assert_true(sg_v3_dot(tl.dir, cam.up) > 0.0f);
     assert_true(sg_v3_dot(tl.dir, cam.right) < 0.0f);
+    /* Footprint: the angle between the rays of two neighbouring pixels
+     * (the centre one and the one below it) is the centre ray's spread
+     * to first order; an off-centre pixel's footprint is narrower. */
+    sg_ray below = sg_camera_ray(&cam, 50.0f + 0.5f, 38.0f + 0.5f, w, h);
+    float angle = acosf(sg_v3_dot(r.dir, below.dir));
+    if (!(fabsf(r.spread - angle) < 1e-3f * angle))
+        fail_msg("centre spread %g, angle to the next pixel %g", (double)r.spread, (double)angle);
+    assert_true(tl.spread > 0.0f && tl.spread < r.spread);
     /* Framing: the centre ray passes through the box centre. */
     sg_aabb box = {{-1, 0, -2}, {3, 5, 1}};
     assert_int_equal(sg_camera_frame(box, sg_v3(-1, -0.5f, -1), sg_v3(0, 1, 0), 40.0f, 1.5f, 0.0f, &cam,
