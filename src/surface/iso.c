@@ -1,0 +1,500 @@
+/* iso.c — ray casting the Implicit Surface Octree (Kashyap 2010, §4.5),
+ * the corner codec (§4.4), and the ISO's accessors. Built in iso_build.c.
+ *
+ * Traversal: an explicit stack of cells with their ray intervals; the
+ * children of a cell are pushed in the reverse of the order (k ^ octant),
+ * octant bit a set where the ray runs towards -a, which is front to back
+ * for the children a ray meets (it only ever moves into children whose
+ * flipped index is a superset of the current one's). Each cell's slab
+ * interval comes from its parent's three planes and the shared middle
+ * planes, computed from integer grid coordinates (iso_int.h), so two
+ * cells sharing a face see the ray cross it at the same t.
+ *
+ * In a leaf, the ray x(t) = o + t d, t = t0 + σ (t1 - t0), σ in [0,1],
+ * puts the trilinear patch at a cubic g(σ) (the patch is multilinear and
+ * each local coordinate is linear in σ). Its critical points split [0,1]
+ * into monotone pieces; a piece whose ends change sign holds exactly one
+ * root, found by Newton's method kept inside the shrinking bracket
+ * (bisection when Newton leaves it) to SG_ISO_ROOT_EPS. The paper marched
+ * samples and interpolated (§4.5), which §4.5.2 then has to paper over
+ * with seamless ray tracing; the exact root needs neither.
+ *
+ * Invariants:
+ *  1. a returned hit lies in [ray->tmin, ray->tmax], inside the leaf's ray
+ *     interval, and its crossing is accepted by the ray's flags;
+ *  2. its normal lies on its crossing's side: dot(dir, n) < 0 for an
+ *     entry, > 0 for an exit (turned by SIDE_COS where the interpolated
+ *     normal disagrees, as mls.c does);
+ *  3. leaves are visited in increasing t, so the first accepted root is
+ *     the nearest.
+ */
+#include "surface/iso.h"
+
+#include <assert.h>
+#include <math.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "surface/iso_int.h"
+
+/* |cos| between the ray and a normal turned to its crossing's side. */
+static const float SIDE_COS = 1e-3f;
+
+/* A sign change across the shared face of two consecutive leaves counts
+ * when their ray intervals meet within this fraction of the leaf edge. */
+static const float CARRY_EPS = 1e-5f;
+
+enum { STACK_MAX = 8 * ISO_MAX_DEPTH + 8 };
+
+void sg_iso_destroy(sg_iso *iso)
+{
+    if (!iso)
+        return;
+    sg_free(iso->nodes);
+    sg_free(iso->leaves);
+    sg_free(iso->cf);
+    sg_free(iso->cn);
+    sg_free(iso);
+}
+
+void sg_iso_get_info(const sg_iso *iso, sg_iso_info *info)
+{
+    assert(iso && info);
+    *info = iso->info;
+}
+
+/* ---- normal codec (Cigolle et al. 2014, oct32P: the rounding nearest in
+ * angle among the four neighbours) ---------------------------------------- */
+
+static inline float sign_nz(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
+
+static sg_vec3 oct_decode(float u, float v)
+{
+    sg_vec3 n = sg_v3(u, v, 1.0f - fabsf(u) - fabsf(v));
+    if (n.z < 0.0f) {
+        float x = n.x;
+        n.x = (1.0f - fabsf(n.y)) * sign_nz(x);
+        n.y = (1.0f - fabsf(x)) * sign_nz(n.y);
+    }
+    return sg_v3_normalize(n);
+}
+
+static inline int16_t q16(float v) { return (int16_t)fmaxf(-32767.0f, fminf(32767.0f, v)); }
+
+static inline uint32_t pack(int16_t a, int16_t b) { return (uint32_t)(uint16_t)a | ((uint32_t)(uint16_t)b << 16); }
+
+uint32_t sg_iso_encode_normal(sg_vec3 n)
+{
+    float l1 = fabsf(n.x) + fabsf(n.y) + fabsf(n.z);
+    if (!(l1 > 0.0f))
+        return pack(0, 0); /* decodes to +z; only invalid corners have none */
+    float u = n.x / l1, v = n.y / l1;
+    if (n.z < 0.0f) {
+        float x = u;
+        u = (1.0f - fabsf(v)) * sign_nz(x);
+        v = (1.0f - fabsf(x)) * sign_nz(v);
+    }
+    float fu = floorf(u * 32767.0f), fv = floorf(v * 32767.0f);
+    /* judged by the squared distance: a float dot product near 1 cannot
+     * tell angles below ~3e-4 apart */
+    sg_vec3 un = sg_v3_normalize(n);
+    uint32_t best = 0;
+    float best_d2 = INFINITY;
+    for (int k = 0; k < 4; ++k) {
+        int16_t a = q16(fu + (float)(k & 1)), b = q16(fv + (float)(k >> 1));
+        sg_vec3 e = sg_v3_sub(oct_decode((float)a / 32767.0f, (float)b / 32767.0f), un);
+        float d2 = sg_v3_dot(e, e);
+        if (d2 < best_d2) {
+            best_d2 = d2;
+            best = pack(a, b);
+        }
+    }
+    return best;
+}
+
+sg_vec3 sg_iso_decode_normal(uint32_t code)
+{
+    int16_t a = (int16_t)(uint16_t)(code & 0xFFFFu), b = (int16_t)(uint16_t)(code >> 16);
+    return oct_decode((float)a / 32767.0f, (float)b / 32767.0f);
+}
+
+void sg_iso_leaf_corners(const sg_iso *iso, uint32_t leaf, float f[8], sg_vec3 n[8])
+{
+    assert(leaf < iso->leaf_count);
+    const iso_leaf *L = &iso->leaves[leaf];
+    for (int k = 0; k < 8; ++k) {
+        f[k] = (float)iso->cf[L->corner[k]] * iso->f_scale;
+        n[k] = sg_iso_decode_normal(iso->cn[L->corner[k]]);
+    }
+}
+
+static inline int popcount8(unsigned v) { return __builtin_popcount(v & 0xFFu); }
+
+static inline sg_aabb cell_box(const sg_iso *iso, uint32_t x, uint32_t y, uint32_t z, uint32_t size)
+{
+    sg_aabb b = {sg_v3(iso_coord(iso->lo.x, iso->unit, x), iso_coord(iso->lo.y, iso->unit, y),
+                       iso_coord(iso->lo.z, iso->unit, z)),
+                 sg_v3(iso_coord(iso->lo.x, iso->unit, x + size), iso_coord(iso->lo.y, iso->unit, y + size),
+                       iso_coord(iso->lo.z, iso->unit, z + size))};
+    return b;
+}
+
+static void boxes_rec(const sg_iso *iso, uint32_t node, uint32_t x, uint32_t y, uint32_t z, int level,
+                      sg_aabb *boxes)
+{
+    const iso_node *N = &iso->nodes[node];
+    uint32_t hs = 1u << (iso->max_depth - level - 1);
+    for (unsigned k = 0; k < 8; ++k) {
+        if (!(N->child_mask >> k & 1u))
+            continue;
+        uint32_t cx = x + (k & 1 ? hs : 0), cy = y + (k & 2 ? hs : 0), cz = z + (k & 4 ? hs : 0);
+        unsigned below = (1u << k) - 1u;
+        if (N->leaf_mask >> k & 1u)
+            boxes[N->leaf_base + popcount8(N->leaf_mask & below)] = cell_box(iso, cx, cy, cz, hs);
+        else
+            boxes_rec(iso, N->inner_base + (uint32_t)popcount8(N->child_mask & ~N->leaf_mask & below), cx, cy, cz,
+                      level + 1, boxes);
+    }
+}
+
+void sg_iso_leaf_boxes(const sg_iso *iso, sg_aabb *boxes)
+{
+    if (iso->node_count)
+        boxes_rec(iso, 0, 0, 0, 0, 0, boxes);
+}
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; ++i) {
+        h ^= b[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+uint64_t sg_iso_checksum(const sg_iso *iso)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    h = fnv(h, &iso->lo, sizeof iso->lo);
+    h = fnv(h, &iso->edge, sizeof iso->edge);
+    h = fnv(h, &iso->f_scale, sizeof iso->f_scale);
+    h = fnv(h, iso->nodes, iso->node_count * sizeof *iso->nodes);
+    h = fnv(h, iso->leaves, iso->leaf_count * sizeof *iso->leaves);
+    h = fnv(h, iso->cf, iso->corner_count * sizeof *iso->cf);
+    h = fnv(h, iso->cn, iso->corner_count * sizeof *iso->cn);
+    return h;
+}
+
+/* ---- ray casting ------------------------------------------------------------ */
+
+/* What a ray carries from leaf to leaf. */
+typedef struct ray_state {
+    const sg_ray *ray;
+    int want_front, want_back, either;
+    int outside;        /* either: some patch on the ray so far was > 0      */
+    int carry;          /* the last leaf's exit value is known ...          */
+    float carry_t;      /* ... at this t ...                                 */
+    float carry_g;      /* ... and is this                                   */
+    uint64_t isects, roots;
+} ray_state;
+
+typedef struct cubic {
+    float a0, a1, a2, a3;
+} cubic;
+
+static inline float cubic_at(const cubic *c, float s) { return ((c->a3 * s + c->a2) * s + c->a1) * s + c->a0; }
+static inline float cubic_d(const cubic *c, float s) { return (3.0f * c->a3 * s + 2.0f * c->a2) * s + c->a1; }
+
+/* The root of c in the monotone piece [lo, hi] where c(lo) is of class
+ * (> 0) == pos and c(hi) is not. */
+static float solve_piece(const cubic *c, float lo, float hi, float glo, float ghi, int pos)
+{
+    float s = lo + (hi - lo) * (glo / (glo - ghi)); /* secant start */
+    if (!(s > lo && s < hi))
+        s = 0.5f * (lo + hi);
+    for (int it = 0; it < 40; ++it) {
+        float g = cubic_at(c, s);
+        if (g == 0.0f)
+            return s;
+        if ((g > 0.0f) == pos)
+            lo = s;
+        else
+            hi = s;
+        if (hi - lo <= SG_ISO_ROOT_EPS)
+            break;
+        float d = cubic_d(c, s), sn = s - g / d;
+        if (!(sn > lo && sn < hi))
+            sn = 0.5f * (lo + hi);
+        if (fabsf(sn - s) <= 0.25f * SG_ISO_ROOT_EPS) {
+            s = sn;
+            break;
+        }
+        s = sn;
+    }
+    return s;
+}
+
+/* Roots of 3 a3 s^2 + 2 a2 s + a1 in (0, 1), ascending; returns the count. */
+static int critical_points(const cubic *c, float out[2])
+{
+    float A = 3.0f * c->a3, B = 2.0f * c->a2, C = c->a1;
+    float r[2];
+    int n = 0;
+    float scale = fabsf(A) + fabsf(B) + fabsf(C);
+    if (!(scale > 0.0f))
+        return 0;
+    if (fabsf(A) <= 1e-7f * scale) {
+        if (fabsf(B) > 0.0f)
+            r[n++] = -C / B;
+    } else {
+        float disc = B * B - 4.0f * A * C;
+        if (disc >= 0.0f) {
+            /* the stable pair (no cancellation between -B and the root) */
+            float q = -0.5f * (B + copysignf(sqrtf(disc), B));
+            r[n++] = q / A;
+            if (q != 0.0f)
+                r[n++] = C / q;
+        }
+    }
+    int m = 0;
+    for (int i = 0; i < n; ++i)
+        if (r[i] > 0.0f && r[i] < 1.0f)
+            out[m++] = r[i];
+    if (m == 2 && out[0] > out[1]) {
+        float t = out[0];
+        out[0] = out[1];
+        out[1] = t;
+    }
+    return m;
+}
+
+/* Accepts or rejects a crossing at σ of the leaf; fills hit on accept. */
+static int accept(const sg_iso *iso, const iso_leaf *L, ray_state *rs, float t, sg_vec3 uvw, int entry, uint32_t leaf,
+                  sg_hit *hit)
+{
+    const sg_ray *ray = rs->ray;
+    if (entry ? !rs->want_front : (!rs->want_back || (rs->either && rs->outside)))
+        return 0;
+    if (!(t >= ray->tmin && t <= ray->tmax))
+        return 0;
+    /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
+    sg_vec3 n = sg_v3(0, 0, 0);
+    for (int k = 0; k < 8; ++k) {
+        float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
+        n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[L->corner[k]]), w);
+    }
+    n = sg_v3_normalize(n);
+    float side = entry ? -1.0f : 1.0f;
+    float dn = sg_v3_dot(ray->dir, n);
+    if (!(dn * side > SIDE_COS)) /* invariant 2 */
+        n = sg_v3_normalize(sg_v3_madd(n, ray->dir, side * SIDE_COS - dn));
+    if (sg_ray_is_self(ray, t, n))
+        return 0;
+    hit->t = t;
+    hit->p = sg_v3_madd(ray->org, ray->dir, t);
+    hit->n = n;
+    hit->splat = L->splat;
+    hit->leaf = leaf;
+    return 1;
+}
+
+/* The first accepted crossing in leaf `leaf` (box b) over [t0, t1]. */
+static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    const iso_leaf *L = &iso->leaves[leaf];
+    const sg_ray *ray = rs->ray;
+    float v[8];
+    for (int k = 0; k < 8; ++k)
+        v[k] = (float)iso->cf[L->corner[k]] * iso->f_scale;
+    float k1 = v[1] - v[0], k2 = v[2] - v[0], k3 = v[4] - v[0];
+    float k4 = v[3] - v[1] - v[2] + v[0], k5 = v[6] - v[2] - v[4] + v[0], k6 = v[5] - v[1] - v[4] + v[0];
+    float k7 = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
+    sg_vec3 h = sg_v3_sub(b.hi, b.lo);
+    float S = t1 - t0;
+    sg_vec3 e = sg_v3_madd(ray->org, ray->dir, t0);
+    float u = (e.x - b.lo.x) / h.x, w = (e.y - b.lo.y) / h.y, z = (e.z - b.lo.z) / h.z;
+    float bu = ray->dir.x * S / h.x, bw = ray->dir.y * S / h.y, bz = ray->dir.z * S / h.z;
+    cubic c;
+    c.a0 = v[0] + k1 * u + k2 * w + k3 * z + k4 * u * w + k5 * w * z + k6 * u * z + k7 * u * w * z;
+    c.a1 = k1 * bu + k2 * bw + k3 * bz + k4 * (u * bw + w * bu) + k5 * (w * bz + z * bw) + k6 * (u * bz + z * bu) +
+           k7 * (bu * w * z + u * bw * z + u * w * bz);
+    c.a2 = k4 * bu * bw + k5 * bw * bz + k6 * bu * bz + k7 * (bu * bw * z + bu * w * bz + u * bw * bz);
+    c.a3 = k7 * bu * bw * bz;
+    rs->isects++;
+    float edge = h.x;
+    /* a sign change across the face shared with the previous leaf */
+    if (rs->carry && fabsf(t0 - rs->carry_t) <= CARRY_EPS * edge) {
+        int was_pos = rs->carry_g > 0.0f, is_pos = c.a0 > 0.0f;
+        if (was_pos != is_pos) {
+            rs->roots++;
+            if (accept(iso, L, rs, t0, sg_v3(u, w, z), was_pos, leaf, hit))
+                return 1;
+        }
+    }
+    float cut[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+    int m = critical_points(&c, cut + 1);
+    cut[m + 1] = 1.0f;
+    float ga = c.a0;
+    int crossed = 0;
+    for (int p = 0; p <= m; ++p) {
+        float pa = cut[p], pb = cut[p + 1];
+        float gb = p == m ? cubic_at(&c, 1.0f) : cubic_at(&c, pb);
+        if (rs->either && ga > 0.0f)
+            rs->outside = 1;
+        int entry = ga > 0.0f && gb <= 0.0f, exit = ga <= 0.0f && gb > 0.0f;
+        if (entry || exit) {
+            crossed = 1;
+            rs->roots++;
+            float s = solve_piece(&c, pa, pb, ga, gb, entry);
+            float t = t0 + s * S;
+            sg_vec3 q = sg_v3(u + bu * s, w + bw * s, z + bz * s);
+            if (accept(iso, L, rs, t, q, entry, leaf, hit))
+                return 1;
+        }
+        if (rs->either && gb > 0.0f)
+            rs->outside = 1;
+        ga = gb;
+    }
+    /* A jump at the next face counts only after a leaf without a crossing
+     * of its own: after one, a jump back is the two patches covering the
+     * same stretch of surface twice (leaves of different sizes), and would
+     * be a second, spurious crossing. */
+    rs->carry = !crossed;
+    rs->carry_t = t1;
+    rs->carry_g = ga;
+    return 0;
+}
+
+typedef struct stack_entry {
+    uint32_t index;  /* node or leaf                                   */
+    uint32_t x, y, z;
+    float t0, t1;
+    uint8_t level;
+    uint8_t is_leaf;
+} stack_entry;
+
+/* Front-to-back traversal; the first accepted crossing (see file note). */
+static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
+{
+    ray_state rs = {.ray = ray};
+    rs.want_front = !(ray->flags & SG_RAY_BACK_ONLY);
+    rs.want_back = !(ray->flags & SG_RAY_FRONT_ONLY);
+    rs.either = rs.want_front && rs.want_back;
+    uint64_t nodes = 0, leaves = 0;
+    int found = 0;
+    if (!iso->node_count)
+        goto out;
+    sg_vec3 o = ray->org, d = ray->dir;
+    float od[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z}, lo[3] = {iso->lo.x, iso->lo.y, iso->lo.z};
+    float inv[3];
+    int par[3];            /* the ray is parallel to axis a's planes */
+    unsigned octant = 0;
+    for (int a = 0; a < 3; ++a) {
+        par[a] = dd[a] == 0.0f;
+        inv[a] = par[a] ? 0.0f : 1.0f / dd[a];
+        if (dd[a] < 0.0f)
+            octant |= 1u << a;
+    }
+    /* root interval */
+    float t0 = ray->tmin, t1 = ray->tmax;
+    uint32_t full = 1u << iso->max_depth;
+    for (int a = 0; a < 3; ++a) {
+        float p0 = iso_coord(lo[a], iso->unit, 0), p1 = iso_coord(lo[a], iso->unit, full);
+        if (par[a]) {
+            if (!(od[a] >= p0 && od[a] <= p1))
+                goto out;
+            continue;
+        }
+        float ta = (p0 - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
+        t0 = fmaxf(t0, fminf(ta, tb));
+        t1 = fminf(t1, fmaxf(ta, tb));
+    }
+    if (!(t0 <= t1))
+        goto out;
+    stack_entry st[STACK_MAX];
+    int sp = 0;
+    st[sp++] = (stack_entry){0, 0, 0, 0, t0, t1, 0, 0};
+    while (sp > 0) {
+        stack_entry e = st[--sp];
+        nodes++;
+        uint32_t size = 1u << (iso->max_depth - e.level);
+        if (e.is_leaf) {
+            leaves++;
+            if (leaf_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
+                found = 1;
+                break;
+            }
+            continue;
+        }
+        const iso_node *N = &iso->nodes[e.index];
+        uint32_t hs = size >> 1;
+        uint32_t base[3] = {e.x, e.y, e.z};
+        /* per axis, the t interval of the low and the high half */
+        float ilo[3][2], ihi[3][2];
+        for (int a = 0; a < 3; ++a) {
+            float p0 = iso_coord(lo[a], iso->unit, base[a]), pm = iso_coord(lo[a], iso->unit, base[a] + hs),
+                  p1 = iso_coord(lo[a], iso->unit, base[a] + size);
+            if (par[a]) {
+                ilo[a][0] = od[a] <= pm ? -INFINITY : INFINITY;
+                ihi[a][0] = od[a] <= pm ? INFINITY : -INFINITY;
+                ilo[a][1] = od[a] >= pm ? -INFINITY : INFINITY;
+                ihi[a][1] = od[a] >= pm ? INFINITY : -INFINITY;
+                continue;
+            }
+            float ta = (p0 - od[a]) * inv[a], tm = (pm - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
+            ilo[a][0] = fminf(ta, tm);
+            ihi[a][0] = fmaxf(ta, tm);
+            ilo[a][1] = fminf(tm, tb);
+            ihi[a][1] = fmaxf(tm, tb);
+        }
+        unsigned inner_mask = N->child_mask & ~N->leaf_mask;
+        for (int j = 7; j >= 0; --j) {
+            unsigned k = (unsigned)j ^ octant;
+            if (!(N->child_mask >> k & 1u))
+                continue;
+            int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
+            float c0 = fmaxf(fmaxf(e.t0, ilo[0][bx]), fmaxf(ilo[1][by], ilo[2][bz]));
+            float c1 = fminf(fminf(e.t1, ihi[0][bx]), fminf(ihi[1][by], ihi[2][bz]));
+            if (!(c0 <= c1))
+                continue;
+            unsigned below = (1u << k) - 1u;
+            stack_entry ce = {0, base[0] + (bx ? hs : 0), base[1] + (by ? hs : 0), base[2] + (bz ? hs : 0), c0, c1,
+                              (uint8_t)(e.level + 1), 0};
+            if (N->leaf_mask >> k & 1u) {
+                ce.index = N->leaf_base + (uint32_t)popcount8(N->leaf_mask & below);
+                ce.is_leaf = 1;
+            } else {
+                ce.index = N->inner_base + (uint32_t)popcount8(inner_mask & below);
+            }
+            assert(sp < STACK_MAX);
+            st[sp++] = ce;
+        }
+    }
+out:
+    if (!found)
+        hit->splat = SG_INVALID_ID;
+    if (stats) {
+        stats->rays++;
+        stats->nodes += nodes;
+        stats->leaves += leaves;
+        stats->isects += rs.isects;
+        stats->splats += rs.roots;
+        stats->hits += (uint64_t)found;
+    }
+    return found;
+}
+
+int sg_iso_intersect(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
+{
+    assert(iso && ray && hit);
+    return trace(iso, ray, hit, stats);
+}
+
+int sg_iso_occluded(const sg_iso *iso, const sg_ray *ray, sg_ray_stats *stats)
+{
+    /* the nearest accepted crossing is the first one the traversal meets:
+     * nothing cheaper to stop at earlier */
+    sg_hit h;
+    return trace(iso, ray, &h, stats);
+}

@@ -1,0 +1,678 @@
+/* iso_build.c — building the Implicit Surface Octree (Kashyap 2010, §4.3,
+ * §4.3.1, §4.4; rules a-c and the corner field in iso.h).
+ *
+ * The build is a recursion over cells, each with the list of splats whose
+ * support ball touches its closed box (filtered from its parent's list).
+ * Every point where f is evaluated lies on the box of the cell that asks,
+ * so that list holds every splat of non-zero weight there; the lists keep
+ * increasing splat order and sg_mls_field_indexed skips zero weights, so f
+ * at a grid point is the same bits whichever cell computes it.
+ *
+ * Parallelism: the first TOP_LEVELS levels are split serially; each kept
+ * cell at that level is a task that builds its subtree ("part") into its
+ * own arrays (OpenMP dynamic schedule). The parts are then laid out
+ * serially in breadth-first order from the root: inner children of a node
+ * contiguous, leaf children contiguous, corners numbered in order of first
+ * use. Nothing in the result depends on which thread built what.
+ *
+ * Invariants:
+ *  1. a stored leaf's 8 corners are valid and their f values change sign
+ *     (min < 0 < max, or a zero beside a non-zero);
+ *  2. a corner key (integer coordinates at max_depth) names one stored
+ *     corner; leaves sharing a grid point share its index;
+ *  3. nodes[0] is the root; every stored inner node has a non-empty
+ *     child_mask, and leaf_mask is a subset of child_mask.
+ */
+#include <assert.h>
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "surface/iso_int.h"
+#include "surface/mls.h"
+
+enum { TOP_LEVELS = 3 }; /* serial split into up to 512 tasks */
+
+#define REF_EMPTY 0xFFFFFFFFu
+#define REF_LEAF 0x80000000u
+
+/* Slack of the ball-touches-box test: a splat whose kernel is non-zero at a
+ * point of the box (|x - p|^2 / r^2 < 1 in float) must pass it. */
+static const float TOUCH_SLACK = 1.0001f;
+
+typedef struct build_ctx {
+    const sg_pointset *ps;
+    sg_kernel kernel;
+    int max_depth;
+    float tol, leaf_radii;
+    sg_vec3 lo;
+    float unit;
+} build_ctx;
+
+/* A subdivided cell while its subtree is being built: its children's refs
+ * (REF_EMPTY, REF_LEAF | leaf, or an inner node of the same part). */
+typedef struct tnode {
+    uint32_t child[8];
+} tnode;
+
+typedef struct tleaf {
+    uint32_t corner[8]; /* slots in the part's point table */
+    uint32_t splat;
+} tleaf;
+
+/* One task's subtree: its nodes, leaves, the points where f was evaluated
+ * (a hash on their keys), and the stack of splat lists. */
+typedef struct part {
+    uint32_t ix, iy, iz;     /* the task cell (level TOP_LEVELS)         */
+    size_t list_n;           /* its splats, at scratch[0..list_n)        */
+    tnode *nodes; size_t nn, ncap;
+    tleaf *leaves; size_t nl, lcap;
+    uint64_t *pkey; float *pf; sg_vec3 *pn; size_t np, pcap; /* evaluated points */
+    uint32_t *hash; size_t hcap; /* open addressing: slot + 1, 0 = empty   */
+    uint32_t *scratch; size_t sn, scap;
+    uint32_t root;           /* ref of the task cell                     */
+    int depth;               /* deepest stored leaf                      */
+    int nomem;
+} part;
+
+static inline uint64_t point_key(uint32_t x, uint32_t y, uint32_t z)
+{
+    return (uint64_t)x | ((uint64_t)y << 21) | ((uint64_t)z << 42);
+}
+
+static inline uint64_t hash64(uint64_t k)
+{
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdull;
+    k ^= k >> 33;
+    k *= 0xc4ceb9fe1a85ec53ull;
+    k ^= k >> 33;
+    return k;
+}
+
+/* Grows an array of elements of `size` bytes to hold at least `need`. */
+static int grow(void **p, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return 1;
+    size_t nc = *cap ? *cap : 64;
+    while (nc < need)
+        nc *= 2;
+    size_t old = *cap;
+    if (!*p) {
+        *p = sg_alloc_array(nc, size);
+        if (!*p)
+            return 0;
+    } else if (!sg_realloc_array(p, old, nc, size)) {
+        return 0;
+    }
+    *cap = nc;
+    return 1;
+}
+
+/* Squared distance from p to the box [a, b]. */
+static inline float dist2_box(sg_vec3 p, sg_vec3 a, sg_vec3 b)
+{
+    float dx = fmaxf(fmaxf(a.x - p.x, p.x - b.x), 0.0f);
+    float dy = fmaxf(fmaxf(a.y - p.y, p.y - b.y), 0.0f);
+    float dz = fmaxf(fmaxf(a.z - p.z, p.z - b.z), 0.0f);
+    return dx * dx + dy * dy + dz * dz;
+}
+
+static inline int ball_touches(const sg_pointset *ps, uint32_t i, sg_vec3 a, sg_vec3 b)
+{
+    float r = ps->radius[i] * TOUCH_SLACK;
+    return dist2_box(sg_pointset_position(ps, i), a, b) <= r * r;
+}
+
+/* The splat's disk thickened by SG_ISO_SLAB radii (a slab through the
+ * ball) meets the box: the ball touches it and the box's extent along n
+ * reaches the slab. Conservative (the ball and slab may meet the box in
+ * different places), which only keeps a few more cells. */
+static inline int disk_touches(const sg_pointset *ps, uint32_t i, sg_vec3 a, sg_vec3 b)
+{
+    if (!ball_touches(ps, i, a, b))
+        return 0;
+    sg_vec3 n = sg_pointset_normal(ps, i);
+    sg_vec3 c = sg_v3_scale(sg_v3_add(a, b), 0.5f), e = sg_v3_scale(sg_v3_sub(b, a), 0.5f);
+    float reach = e.x * fabsf(n.x) + e.y * fabsf(n.y) + e.z * fabsf(n.z);
+    float d = sg_v3_dot(n, sg_v3_sub(c, sg_pointset_position(ps, i)));
+    return fabsf(d) <= reach + SG_ISO_SLAB * ps->radius[i];
+}
+
+float sg_iso_field(const sg_pointset *ps, const uint32_t *idx, size_t count, sg_kernel kernel, sg_vec3 x,
+                   sg_vec3 *n)
+{
+    float W;
+    sg_vec3 N;
+    float F = sg_mls_field_indexed(ps, idx, count, kernel, x, &W, &N);
+    float ln = sg_v3_length(N);
+    /* Opposed normals that cancel leave no plane to measure against. */
+    if (!(W > 0.0f) || !(ln > 1e-6f * W)) {
+        if (n)
+            *n = sg_v3(0, 0, 0);
+        return NAN;
+    }
+    if (n)
+        *n = sg_v3_scale(N, 1.0f / ln);
+    return F / (W * ln);
+}
+
+static inline sg_vec3 grid_point(const build_ctx *c, uint32_t x, uint32_t y, uint32_t z)
+{
+    return sg_v3(iso_coord(c->lo.x, c->unit, x), iso_coord(c->lo.y, c->unit, y), iso_coord(c->lo.z, c->unit, z));
+}
+
+/* Slot of grid point (x, y, z) in the part's point table, evaluating f
+ * there from the list scratch[off..off+n) the first time. UINT32_MAX when
+ * out of memory. */
+static uint32_t point_slot(const build_ctx *c, part *P, size_t off, size_t n, uint32_t x, uint32_t y, uint32_t z)
+{
+    uint64_t key = point_key(x, y, z);
+    if ((P->np + 1) * 2 > P->hcap) {
+        size_t nc = P->hcap ? P->hcap * 2 : 1024;
+        uint32_t *h = sg_calloc_array(nc, sizeof *h);
+        if (!h)
+            return UINT32_MAX;
+        for (size_t s = 0; s < P->np; ++s) {
+            size_t j = hash64(P->pkey[s]) & (nc - 1);
+            while (h[j])
+                j = (j + 1) & (nc - 1);
+            h[j] = (uint32_t)s + 1;
+        }
+        sg_free(P->hash);
+        P->hash = h;
+        P->hcap = nc;
+    }
+    size_t j = hash64(key) & (P->hcap - 1);
+    while (P->hash[j]) {
+        uint32_t s = P->hash[j] - 1;
+        if (P->pkey[s] == key)
+            return s;
+        j = (j + 1) & (P->hcap - 1);
+    }
+    size_t need = P->np + 1;
+    size_t cap = P->pcap;
+    if (need > cap) {
+        size_t c1 = cap, c2 = cap, c3 = cap;
+        if (!grow((void **)&P->pkey, &c1, need, sizeof *P->pkey) || !grow((void **)&P->pf, &c2, need, sizeof *P->pf) ||
+            !grow((void **)&P->pn, &c3, need, sizeof *P->pn))
+            return UINT32_MAX;
+        /* Keep the three capacities equal: each grew from cap the same way. */
+        assert(c1 == c2 && c2 == c3);
+        P->pcap = c1;
+    }
+    uint32_t s = (uint32_t)P->np++;
+    P->pkey[s] = key;
+    P->pf[s] = sg_iso_field(c->ps, P->scratch + off, n, c->kernel, grid_point(c, x, y, z), &P->pn[s]);
+    P->hash[j] = s + 1;
+    return s;
+}
+
+/* Trilinear patch of corner values v at the 27 points of the 3x3x3
+ * lattice of the cell (a, b, c in {0, 1, 2} = low, middle, high). */
+static inline float patch_at(const float v[8], int a, int b, int cz)
+{
+    float u = 0.5f * (float)a, w = 0.5f * (float)b, s = 0.5f * (float)cz;
+    float x00 = v[0] + (v[1] - v[0]) * u, x10 = v[2] + (v[3] - v[2]) * u;
+    float x01 = v[4] + (v[5] - v[4]) * u, x11 = v[6] + (v[7] - v[6]) * u;
+    float y0 = x00 + (x10 - x00) * w, y1 = x01 + (x11 - x01) * w;
+    return y0 + (y1 - y0) * s;
+}
+
+/* Builds the cell at (x, y, z), level `level`, whose splat list is
+ * scratch[off..off+n); returns its ref. */
+static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, uint32_t z, int level, size_t off,
+                           size_t n)
+{
+    const sg_pointset *ps = c->ps;
+    uint32_t size = 1u << (c->max_depth - level);
+    sg_vec3 a = grid_point(c, x, y, z), b = grid_point(c, x + size, y + size, z + size);
+    float r_min = INFINITY;
+    for (size_t k = 0; k < n; ++k) {
+        uint32_t i = P->scratch[off + k];
+        if (ps->radius[i] < r_min && disk_touches(ps, i, a, b))
+            r_min = ps->radius[i];
+    }
+    if (r_min == INFINITY)
+        return REF_EMPTY; /* no splat's thick disk meets the cell */
+    float edge = b.x - a.x;
+    int can_split = level < c->max_depth;
+    int split = can_split && edge > c->leaf_radii * r_min; /* rule a */
+    uint32_t cs[8];
+    float fv[8];
+    if (!split) {
+        int valid = 0;
+        for (int k = 0; k < 8; ++k) {
+            cs[k] = point_slot(c, P, off, n, x + (k & 1 ? size : 0), y + (k & 2 ? size : 0), z + (k & 4 ? size : 0));
+            if (cs[k] == UINT32_MAX) {
+                P->nomem = 1;
+                return REF_EMPTY;
+            }
+            fv[k] = P->pf[cs[k]];
+            valid += !isnan(fv[k]);
+        }
+        if (valid < 8) {
+            /* rule b: follow the surface towards the supports' edge */
+            split = can_split && valid > 0 && edge > 0.25f * c->leaf_radii * r_min;
+        } else if (can_split) {
+            /* rule c over the 19 lattice points that are not corners */
+            for (int q = 0; q < 27 && !split; ++q) {
+                int ga = q % 3, gb = (q / 3) % 3, gc = q / 9;
+                if ((ga != 1) + (gb != 1) + (gc != 1) == 3)
+                    continue; /* a corner */
+                uint32_t s = point_slot(c, P, off, n, x + (uint32_t)ga * (size / 2), y + (uint32_t)gb * (size / 2),
+                                        z + (uint32_t)gc * (size / 2));
+                if (s == UINT32_MAX) {
+                    P->nomem = 1;
+                    return REF_EMPTY;
+                }
+                float e = fabsf(P->pf[s] - patch_at(fv, ga, gb, gc));
+                if (!(e <= c->tol * r_min)) /* NaN (invalid point) splits too */
+                    split = 1;
+            }
+        }
+        if (!split) {
+            if (valid < 8)
+                return REF_EMPTY; /* an invalid corner: never intersected (iso.h) */
+            float lo = fv[0], hi = fv[0];
+            for (int k = 1; k < 8; ++k) {
+                lo = fminf(lo, fv[k]);
+                hi = fmaxf(hi, fv[k]);
+            }
+            if (!(lo <= 0.0f && hi >= 0.0f && (lo < 0.0f || hi > 0.0f)))
+                return REF_EMPTY; /* no zero in the patch (invariant 1) */
+            if (!grow((void **)&P->leaves, &P->lcap, P->nl + 1, sizeof *P->leaves)) {
+                P->nomem = 1;
+                return REF_EMPTY;
+            }
+            tleaf *L = &P->leaves[P->nl];
+            memcpy(L->corner, cs, sizeof cs);
+            /* the splat nearest the centre (first of equals: lists ascend) */
+            sg_vec3 m = sg_v3_scale(sg_v3_add(a, b), 0.5f);
+            float best = INFINITY;
+            L->splat = P->scratch[off];
+            for (size_t k = 0; k < n; ++k) {
+                uint32_t i = P->scratch[off + k];
+                sg_vec3 d = sg_v3_sub(sg_pointset_position(ps, i), m);
+                float d2 = sg_v3_dot(d, d);
+                if (d2 < best) {
+                    best = d2;
+                    L->splat = i;
+                }
+            }
+            if (level > P->depth)
+                P->depth = level;
+            return REF_LEAF | (uint32_t)P->nl++;
+        }
+    }
+    /* subdivide: each child's list is filtered onto the top of the stack */
+    uint32_t kids[8];
+    int any = 0;
+    uint32_t hs = size / 2;
+    for (int k = 0; k < 8; ++k) {
+        uint32_t cx = x + (k & 1 ? hs : 0), cy = y + (k & 2 ? hs : 0), cz = z + (k & 4 ? hs : 0);
+        sg_vec3 ca = grid_point(c, cx, cy, cz), cb = grid_point(c, cx + hs, cy + hs, cz + hs);
+        size_t top = P->sn;
+        if (!grow((void **)&P->scratch, &P->scap, top + n, sizeof *P->scratch)) {
+            P->nomem = 1;
+            return REF_EMPTY;
+        }
+        size_t m = 0;
+        for (size_t q = 0; q < n; ++q) {
+            uint32_t i = P->scratch[off + q];
+            if (ball_touches(ps, i, ca, cb))
+                P->scratch[top + m++] = i;
+        }
+        P->sn = top + m;
+        kids[k] = m ? build_cell(c, P, cx, cy, cz, level + 1, top, m) : REF_EMPTY;
+        P->sn = top;
+        if (P->nomem)
+            return REF_EMPTY;
+        any |= kids[k] != REF_EMPTY;
+    }
+    if (!any)
+        return REF_EMPTY;
+    if (!grow((void **)&P->nodes, &P->ncap, P->nn + 1, sizeof *P->nodes)) {
+        P->nomem = 1;
+        return REF_EMPTY;
+    }
+    memcpy(P->nodes[P->nn].child, kids, sizeof kids);
+    return (uint32_t)P->nn++;
+}
+
+static void part_free(part *P)
+{
+    sg_free(P->nodes);
+    sg_free(P->leaves);
+    sg_free(P->pkey);
+    sg_free(P->pf);
+    sg_free(P->pn);
+    sg_free(P->hash);
+    sg_free(P->scratch);
+}
+
+/* ---- the serial top levels ------------------------------------------------ */
+
+/* The top TOP_LEVELS levels as a small tree: child refs are top nodes, or
+ * TASK | part index. */
+#define REF_TASK 0x40000000u
+
+typedef struct top {
+    tnode *nodes; size_t nn, ncap;
+    part *parts; size_t np, pcap;
+    int nomem;
+} top;
+
+static uint32_t split_top(const build_ctx *c, top *T, uint32_t x, uint32_t y, uint32_t z, int level,
+                          const uint32_t *list, size_t n, int levels)
+{
+    uint32_t size = 1u << (c->max_depth - level);
+    sg_vec3 a = grid_point(c, x, y, z), b = grid_point(c, x + size, y + size, z + size);
+    int kept = 0;
+    for (size_t k = 0; k < n && !kept; ++k)
+        kept = disk_touches(c->ps, list[k], a, b);
+    if (!kept)
+        return REF_EMPTY;
+    if (level == levels) {
+        if (!grow((void **)&T->parts, &T->pcap, T->np + 1, sizeof *T->parts)) {
+            T->nomem = 1;
+            return REF_EMPTY;
+        }
+        part *P = &T->parts[T->np];
+        memset(P, 0, sizeof *P);
+        P->ix = x; P->iy = y; P->iz = z;
+        if (!grow((void **)&P->scratch, &P->scap, n, sizeof *P->scratch)) {
+            T->nomem = 1;
+            return REF_EMPTY;
+        }
+        memcpy(P->scratch, list, n * sizeof *list);
+        P->sn = P->list_n = n;
+        return REF_TASK | (uint32_t)T->np++;
+    }
+    uint32_t *sub = sg_alloc_array(n, sizeof *sub);
+    if (!sub) {
+        T->nomem = 1;
+        return REF_EMPTY;
+    }
+    uint32_t kids[8];
+    int any = 0;
+    uint32_t hs = size / 2;
+    for (int k = 0; k < 8; ++k) {
+        uint32_t cx = x + (k & 1 ? hs : 0), cy = y + (k & 2 ? hs : 0), cz = z + (k & 4 ? hs : 0);
+        sg_vec3 ca = grid_point(c, cx, cy, cz), cb = grid_point(c, cx + hs, cy + hs, cz + hs);
+        size_t m = 0;
+        for (size_t q = 0; q < n; ++q)
+            if (ball_touches(c->ps, list[q], ca, cb))
+                sub[m++] = list[q];
+        kids[k] = m ? split_top(c, T, cx, cy, cz, level + 1, sub, m, levels) : REF_EMPTY;
+        if (T->nomem)
+            break;
+        any |= kids[k] != REF_EMPTY;
+    }
+    sg_free(sub);
+    if (T->nomem || !any)
+        return REF_EMPTY;
+    if (!grow((void **)&T->nodes, &T->ncap, T->nn + 1, sizeof *T->nodes)) {
+        T->nomem = 1;
+        return REF_EMPTY;
+    }
+    memcpy(T->nodes[T->nn].child, kids, sizeof kids);
+    return (uint32_t)T->nn++;
+}
+
+/* ---- layout ---------------------------------------------------------------- */
+
+/* A node of the merged tree before layout: which part (T->np = the top
+ * tree) and its ref there. */
+typedef struct gref {
+    uint32_t part, ref;
+} gref;
+
+/* Resolves a child ref of node `from` to the merged tree (a top child
+ * naming a task becomes that part's root). */
+static gref resolve(const top *T, uint32_t from_part, uint32_t ref)
+{
+    gref g = {from_part, ref};
+    if (from_part == T->np && ref != REF_EMPTY && (ref & REF_TASK) && !(ref & REF_LEAF)) {
+        g.part = ref & ~REF_TASK;
+        g.ref = T->parts[g.part].root;
+    }
+    return g;
+}
+
+/* Global corner table during layout: key -> index, hash of index + 1. */
+typedef struct corners {
+    uint64_t *key; float *f; sg_vec3 *n; size_t count, cap;
+    uint32_t *hash; size_t hcap;
+} corners;
+
+static uint32_t corner_index(corners *C, uint64_t key, float f, sg_vec3 n)
+{
+    assert(C->hcap >= 2 * (C->count + 1));
+    size_t j = hash64(key) & (C->hcap - 1);
+    while (C->hash[j]) {
+        uint32_t s = C->hash[j] - 1;
+        if (C->key[s] == key)
+            return s;
+        j = (j + 1) & (C->hcap - 1);
+    }
+    assert(C->count < C->cap);
+    uint32_t s = (uint32_t)C->count++;
+    C->key[s] = key;
+    C->f[s] = f;
+    C->n[s] = n;
+    C->hash[j] = s + 1;
+    return s;
+}
+
+/* Layout of the merged tree into iso (breadth-first; see the file note). */
+static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err)
+{
+    size_t inner = T->nn, leaves = 0;
+    for (size_t p = 0; p < T->np; ++p) {
+        inner += T->parts[p].nn;
+        leaves += T->parts[p].nl;
+    }
+    if (leaves >= UINT32_MAX / 2 || inner >= UINT32_MAX / 2)
+        return sg_error_set(err, SG_ERR_NOMEM, "iso: %zu leaves and %zu nodes exceed 32-bit indices", leaves, inner);
+    sg_status st = SG_OK;
+    gref *queue = sg_alloc_array(inner ? inner : 1, sizeof *queue);
+    iso->nodes = sg_calloc_array(inner ? inner : 1, sizeof *iso->nodes);
+    iso->leaves = sg_alloc_array(leaves ? leaves : 1, sizeof *iso->leaves);
+    corners C = {0};
+    size_t evaluated = 0;
+    for (size_t p = 0; p < T->np; ++p)
+        evaluated += T->parts[p].np;
+    size_t ccap = (leaves * 8 < evaluated ? leaves * 8 : evaluated) + 1, hcap = 1024;
+    while (hcap < 2 * ccap)
+        hcap *= 2;
+    /* corners: at most 8 per leaf, and at most the points evaluated */
+    C.key = sg_alloc_array(ccap, sizeof *C.key);
+    C.f = sg_alloc_array(ccap, sizeof *C.f);
+    C.n = sg_alloc_array(ccap, sizeof *C.n);
+    C.hash = sg_calloc_array(hcap, sizeof *C.hash);
+    C.cap = ccap;
+    C.hcap = hcap;
+    if (!queue || !iso->nodes || !iso->leaves || !C.key || !C.f || !C.n || !C.hash) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "iso: out of memory laying out %zu leaves", leaves);
+        goto done;
+    }
+    size_t qn = 0, ln = 0;
+    if (root != REF_EMPTY) {
+        assert(!(root & REF_LEAF)); /* the top levels always split */
+        queue[qn++] = (gref){(uint32_t)T->np, root};
+    }
+    for (size_t q = 0; q < qn; ++q) {
+        gref g = queue[q];
+        const tnode *tn = g.part == T->np ? &T->nodes[g.ref] : &T->parts[g.part].nodes[g.ref];
+        iso_node *out = &iso->nodes[q];
+        out->inner_base = (uint32_t)qn;
+        out->leaf_base = (uint32_t)ln;
+        for (int k = 0; k < 8; ++k) {
+            gref ch = resolve(T, g.part, tn->child[k]);
+            if (ch.ref == REF_EMPTY)
+                continue;
+            out->child_mask |= (uint8_t)(1u << k);
+            if (ch.ref & REF_LEAF) {
+                const part *P = &T->parts[ch.part];
+                const tleaf *tl = &P->leaves[ch.ref & ~REF_LEAF];
+                iso_leaf *L = &iso->leaves[ln++];
+                out->leaf_mask |= (uint8_t)(1u << k);
+                L->splat = tl->splat;
+                for (int v = 0; v < 8; ++v) {
+                    uint32_t s = tl->corner[v];
+                    L->corner[v] = corner_index(&C, P->pkey[s], P->pf[s], P->pn[s]);
+                }
+            } else {
+                assert(qn < inner);
+                queue[qn++] = ch;
+            }
+        }
+        assert(out->child_mask != 0); /* invariant 3 */
+    }
+    iso->node_count = qn;
+    iso->leaf_count = ln;
+    iso->corner_count = C.count;
+    /* quantise (iso.h): one global step for f */
+    float fmax = 0.0f;
+    for (size_t s = 0; s < C.count; ++s)
+        fmax = fmaxf(fmax, fabsf(C.f[s]));
+    iso->f_scale = fmax > 0.0f ? fmax / 32767.0f : 1.0f;
+    iso->cf = sg_alloc_array(C.count ? C.count : 1, sizeof *iso->cf);
+    iso->cn = sg_alloc_array(C.count ? C.count : 1, sizeof *iso->cn);
+    if (!iso->cf || !iso->cn) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "iso: out of memory for %zu corners", C.count);
+        goto done;
+    }
+    float inv = 1.0f / iso->f_scale;
+    for (size_t s = 0; s < C.count; ++s) {
+        float q = rintf(C.f[s] * inv);
+        iso->cf[s] = (int16_t)fmaxf(-32767.0f, fminf(32767.0f, q));
+        iso->cn[s] = sg_iso_encode_normal(C.n[s]);
+    }
+done:
+    sg_free(queue);
+    sg_free(C.key);
+    sg_free(C.f);
+    sg_free(C.n);
+    sg_free(C.hash);
+    return st;
+}
+
+/* ---- create ------------------------------------------------------------------ */
+
+sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso **out, sg_error *err)
+{
+    if (!ps || !out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: NULL %s", ps ? "out" : "points");
+    sg_iso_desc d = desc ? *desc : (sg_iso_desc){0};
+    if (d.max_depth == 0) d.max_depth = 16;
+    if (d.tolerance == 0.0f) d.tolerance = 0.05f;
+    if (d.leaf_radii == 0.0f) d.leaf_radii = 1.0f;
+    if (d.max_depth < 2 || d.max_depth > ISO_MAX_DEPTH)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: max_depth %d outside 2..%d", d.max_depth,
+                            ISO_MAX_DEPTH);
+    if (!(d.tolerance > 0.0f) || !isfinite(d.tolerance) || !(d.leaf_radii > 0.0f) || !isfinite(d.leaf_radii))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: tolerance %g and leaf_radii %g must be finite and > 0",
+                            (double)d.tolerance, (double)d.leaf_radii);
+    if (ps->count == 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: the pointset is empty");
+    if (ps->count >= UINT32_MAX - 1)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: %zu splats exceed 32-bit ids", ps->count);
+    sg_status st = sg_pointset_validate(ps, err);
+    if (st != SG_OK)
+        return st;
+    double t_start = omp_get_wtime();
+    int threads = d.threads > 0 ? d.threads : omp_get_max_threads();
+
+    /* The root cube: the supports' box, made cubic, a hair larger so that
+     * no support touches its boundary. */
+    sg_aabb box = sg_aabb_empty();
+    float r_min = INFINITY, r_max = 0.0f;
+    for (size_t i = 0; i < ps->count; ++i) {
+        float r = ps->radius[i];
+        sg_vec3 p = sg_pointset_position(ps, i);
+        box = sg_aabb_grow(box, sg_v3_sub(p, sg_v3(r, r, r)));
+        box = sg_aabb_grow(box, sg_v3_add(p, sg_v3(r, r, r)));
+        r_min = fminf(r_min, r);
+        r_max = fmaxf(r_max, r);
+    }
+    sg_vec3 ext = sg_v3_sub(box.hi, box.lo);
+    float edge = fmaxf(ext.x, fmaxf(ext.y, ext.z)) * 1.001f;
+    sg_vec3 mid = sg_v3_scale(sg_v3_add(box.lo, box.hi), 0.5f);
+    build_ctx c = {.ps = ps, .kernel = d.kernel, .max_depth = d.max_depth, .tol = d.tolerance,
+                   .leaf_radii = d.leaf_radii, .lo = sg_v3_sub(mid, sg_v3(0.5f * edge, 0.5f * edge, 0.5f * edge)),
+                   .unit = edge / (float)(1u << d.max_depth)};
+
+    sg_iso *iso = sg_calloc_array(1, sizeof *iso);
+    uint32_t *all = sg_alloc_array(ps->count, sizeof *all);
+    top T = {0};
+    if (!iso || !all) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "sg_iso_create: out of memory for %zu splats", ps->count);
+        goto fail;
+    }
+    iso->lo = c.lo;
+    iso->edge = edge;
+    iso->unit = c.unit;
+    iso->max_depth = d.max_depth;
+    for (size_t i = 0; i < ps->count; ++i)
+        all[i] = (uint32_t)i;
+    int levels = d.max_depth - 1 < TOP_LEVELS ? d.max_depth - 1 : TOP_LEVELS;
+    uint32_t root = split_top(&c, &T, 0, 0, 0, 0, all, ps->count, levels);
+    sg_free(all);
+    all = NULL;
+    if (T.nomem) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "sg_iso_create: out of memory splitting the top levels");
+        goto fail;
+    }
+    int nomem = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(| : nomem)
+    for (size_t p = 0; p < T.np; ++p) {
+        part *P = &T.parts[p];
+        P->root = build_cell(&c, P, P->ix, P->iy, P->iz, levels, 0, P->list_n);
+        nomem |= P->nomem;
+    }
+    if (nomem) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "sg_iso_create: out of memory building the octree");
+        goto fail;
+    }
+    st = lay_out(iso, &T, root, err);
+    if (st != SG_OK)
+        goto fail;
+    int depth = 0;
+    for (size_t p = 0; p < T.np; ++p)
+        depth = T.parts[p].depth > depth ? T.parts[p].depth : depth;
+    for (size_t p = 0; p < T.np; ++p)
+        part_free(&T.parts[p]);
+    sg_free(T.parts);
+    sg_free(T.nodes);
+
+    sg_iso_info *in = &iso->info;
+    in->point_count = ps->count;
+    in->node_count = iso->node_count;
+    in->leaf_count = iso->leaf_count;
+    in->corner_count = iso->corner_count;
+    in->memory_bytes = sizeof *iso + iso->node_count * sizeof(iso_node) + iso->leaf_count * sizeof(iso_leaf) +
+                       iso->corner_count * (sizeof(int16_t) + sizeof(uint32_t));
+    in->bytes_per_leaf = iso->leaf_count ? (double)in->memory_bytes / (double)iso->leaf_count : 0.0;
+    in->bytes_per_point = (double)in->memory_bytes / (double)ps->count;
+    in->depth = depth;
+    in->bounds = (sg_aabb){c.lo, sg_v3_add(c.lo, sg_v3(edge, edge, edge))};
+    in->f_scale = iso->f_scale;
+    in->r_min = r_min;
+    in->r_max = r_max;
+    in->build_seconds = omp_get_wtime() - t_start;
+    *out = iso;
+    return SG_OK;
+
+fail:
+    for (size_t p = 0; p < T.np; ++p)
+        part_free(&T.parts[p]);
+    sg_free(T.parts);
+    sg_free(T.nodes);
+    sg_free(all);
+    sg_iso_destroy(iso);
+    return st;
+}

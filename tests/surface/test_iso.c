@@ -1,0 +1,578 @@
+/* test_iso.c — the Implicit Surface Octree (surface/iso.h): accuracy on a
+ * sampled sphere and plane, agreement with the MLS scene it samples, no
+ * holes, no cracks along shared faces, open holes, the quantisation
+ * bound, face flags, thread-count determinism, bad input. */
+#include "test_support.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "points/primitives.h"
+#include "surface/iso.h"
+#include "surface/scene.h"
+
+static const float PI = 3.14159265358979f;
+
+/* The sphere of radius 1 at the origin, n points on the Fibonacci spiral
+ * (primitives.h: spacing h = sqrt(4 pi / n), radius 1.6 h). */
+static void make_sphere(sg_pointset *ps, size_t n)
+{
+    sg_sphere_points_desc d = {.count = n};
+    assert_int_equal(sg_points_make_sphere(&d, ps, NULL), SG_OK);
+}
+
+static sg_iso *build_iso(const sg_pointset *ps, int threads)
+{
+    sg_iso_desc d = {.threads = threads};
+    sg_iso *iso = NULL;
+    sg_error err = {0};
+    if (sg_iso_create(&d, ps, &iso, &err) != SG_OK)
+        fail_msg("sg_iso_create: %s", err.message);
+    return iso;
+}
+
+static float max_radius(const sg_pointset *ps)
+{
+    float r = 0;
+    for (size_t i = 0; i < ps->count; ++i)
+        r = fmaxf(r, ps->radius[i]);
+    return r;
+}
+
+static sg_vec3 random_dir(uint64_t *rng)
+{
+    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    return sg_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+/* Angle between unit vectors, accurate near 0 (acos of a dot product
+ * resolves only ~5e-4 rad there in float). */
+static float angle(sg_vec3 a, sg_vec3 b) { return 2.0f * asinf(fminf(1.0f, 0.5f * sg_v3_length(sg_v3_sub(a, b)))); }
+
+static sg_ray make_ray(sg_vec3 o, sg_vec3 d, uint32_t flags)
+{
+    sg_ray r = {.org = o, .dir = sg_v3_normalize(d), .tmin = 0, .tmax = INFINITY, .flags = flags};
+    return r;
+}
+
+/* 1. Hits on a sampled unit sphere lie on the sphere, normals radial.
+ *
+ * Tolerances. The MLS surface lies within r^2/(2R) of the sphere (the
+ * points of a cap of radius r lie that close to its tangent plane; see
+ * test_scene.c). The patch matches f within tolerance x r at the lattice
+ * points it was checked at (rule c; f is a distance, |grad f| ~ 1), and
+ * between them departs from a sphere's f by at most its curvature term
+ * h^2/(8R) over a leaf of edge h <= r (rule a); quantisation adds f_scale.
+ * The normal is a mean of unit normals within asin(r/R) of the radial
+ * direction (test_scene.c), interpolated between corners within one leaf
+ * edge: asin(2r/R) covers both. */
+static void test_iso_sphere_accuracy(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    float pos_tol = r * r / 2.0f + 0.05f * r + r * r / 8.0f + info.f_scale;
+    float ang_tol = asinf(2.0f * r);
+    uint64_t rng = 1;
+    int misses = 0;
+    float worst_pos = 0, worst_ang = 0;
+    for (int i = 0; i < 4000; ++i) {
+        sg_vec3 target = random_dir(&rng);
+        sg_vec3 from = sg_v3_scale(sg_v3_normalize(sg_v3_add(target, sg_v3_scale(random_dir(&rng), 0.5f))), 4.0f);
+        sg_ray ray = make_ray(from, sg_v3_sub(target, from), SG_RAY_ANY_FACE);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            ++misses;
+            continue;
+        }
+        worst_pos = fmaxf(worst_pos, fabsf(sg_v3_length(hit.p) - 1.0f));
+        worst_ang = fmaxf(worst_ang, acosf(fminf(1.0f, sg_v3_dot(hit.n, sg_v3_normalize(hit.p)))));
+        assert_true(hit.splat < ps.count);
+        assert_true(hit.leaf < info.leaf_count);
+        assert_true(sg_v3_dot(hit.n, ray.dir) < 0.0f);
+    }
+    printf("sphere 20k: %zu leaves, %zu corners, %zu nodes, depth %d, %.1f B/leaf, worst |p|-R %g (tol %g), "
+           "worst angle %g (tol %g)\n",
+           info.leaf_count, info.corner_count, info.node_count, info.depth, info.bytes_per_leaf, (double)worst_pos,
+           (double)pos_tol, (double)worst_ang, (double)ang_tol);
+    if (misses || worst_pos > pos_tol || worst_ang > ang_tol)
+        fail_msg("%d misses of 4000, worst |p|-R %g (tol %g), worst normal angle %g rad (tol %g)", misses,
+                 (double)worst_pos, (double)pos_tol, (double)worst_ang, (double)ang_tol);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 2. A plane: f = y - y0 exactly at every corner (all splats lie in the
+ * plane with normal +y, so p̄ is in it and n̄ = +y), which a trilinear
+ * patch reproduces; only quantisation (f_scale / 2) and float rounding of
+ * the root (SG_ISO_ROOT_EPS of a leaf's span, ~1e-6 of the 30-unit plane)
+ * remain. Rays stay 2 radii inside the border. */
+static void test_iso_plane_exact(void **state)
+{
+    (void)state;
+    sg_plane_points_desc pd = {.side = 100, .half = 1.0f, .centre = sg_v3(0, 0.25f, 0)};
+    sg_pointset ps = {0};
+    assert_int_equal(sg_points_make_plane(&pd, &ps, NULL), SG_OK);
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    float tol = 0.5f * info.f_scale + 1e-5f;
+    uint64_t rng = 7;
+    float worst = 0, worst_ang = 0;
+    int misses = 0;
+    for (int i = 0; i < 2000; ++i) {
+        float lim = 1.0f - 2.0f * r;
+        sg_vec3 target = sg_v3(lim * (2 * sg_test_rand01(&rng) - 1), 0.25f, lim * (2 * sg_test_rand01(&rng) - 1));
+        sg_vec3 dir = random_dir(&rng);
+        dir.y = -fabsf(dir.y) - 0.2f; /* from above, at most ~80 degrees off the normal */
+        sg_vec3 from = sg_v3_madd(target, sg_v3_normalize(dir), -2.0f);
+        sg_ray ray = make_ray(from, dir, SG_RAY_FRONT_ONLY);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            ++misses;
+            continue;
+        }
+        worst = fmaxf(worst, fabsf(hit.p.y - 0.25f));
+        worst_ang = fmaxf(worst_ang, acosf(fminf(1.0f, hit.n.y)));
+    }
+    if (misses || worst > tol || worst_ang > SG_ISO_NORMAL_EPS)
+        fail_msg("plane: %d misses, worst |y - y0| %g (tol %g), normal angle %g (tol %g)", misses, (double)worst,
+                 (double)tol, (double)worst_ang, (double)SG_ISO_NORMAL_EPS);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* Camera rays: a pinhole at `eye` looking at the origin, n x n pixels over
+ * a 40-degree field. */
+static sg_ray camera_ray(sg_vec3 eye, int n, int x, int y)
+{
+    sg_vec3 fwd = sg_v3_normalize(sg_v3_scale(eye, -1.0f)), right, up;
+    right = sg_v3_normalize(sg_v3_cross(fwd, sg_v3(0, 1, 0)));
+    up = sg_v3_cross(right, fwd);
+    float s = tanf(20.0f * PI / 180.0f);
+    float u = (2.0f * ((float)x + 0.5f) / (float)n - 1.0f) * s, v = (1.0f - 2.0f * ((float)y + 0.5f) / (float)n) * s;
+    return make_ray(eye, sg_v3_add(fwd, sg_v3_add(sg_v3_scale(right, u), sg_v3_scale(up, v))), SG_RAY_ANY_FACE);
+}
+
+/* 3. The ISO agrees with the MLS scene on the same points, ray by ray.
+ *
+ * Coverage: both surfaces are the zero set of one field inside the
+ * supports; they can disagree only on rays within about a leaf of the
+ * silhouette, a few pixels of the 128 x 128 image's silhouette (~ 2 pi x
+ * 40 pixels), under 1.5% of the image; we ask for 99.5% identical.
+ * Distance: the patch is within tolerance x r_min of f at its lattice
+ * points (f a distance), the MLS scene's root within its sampling error
+ * (far below); so along the normal the hits differ by well under a
+ * quarter of the leaf edge (>= r_min / 4) — asked of 99% of the common
+ * hits, the rest being grazing rays where a tiny offset along the normal
+ * is a long one along the ray. */
+static void check_agreement(const sg_pointset *ps, sg_vec3 eye)
+{
+    sg_scene_desc sd = {.model = SG_SURFACE_MLS};
+    sg_scene *scene = NULL;
+    sg_error err = {0};
+    if (sg_scene_create(&sd, ps, &scene, &err) != SG_OK)
+        fail_msg("sg_scene_create: %s", err.message);
+    sg_iso *iso = build_iso(ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    sg_aabb *boxes = malloc(info.leaf_count * sizeof *boxes);
+    assert_non_null(boxes);
+    sg_iso_leaf_boxes(iso, boxes);
+    const int n = 128;
+    int same = 0, both = 0, close = 0, hits = 0;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            sg_ray ray = camera_ray(eye, n, x, y);
+            sg_hit a, b;
+            int ha = sg_scene_intersect(scene, &ray, &a, NULL), hb = sg_iso_intersect(iso, &ray, &b, NULL);
+            same += ha == hb;
+            hits += ha;
+            if (ha && hb) {
+                ++both;
+                float edge = boxes[b.leaf].hi.x - boxes[b.leaf].lo.x;
+                close += fabsf((a.t - b.t) * sg_v3_dot(ray.dir, a.n)) <= 0.25f * edge;
+            }
+        }
+    double fsame = (double)same / (n * n), fclose = both ? (double)close / both : 1.0;
+    printf("agreement: %d MLS hits, hit/miss same %.4f, within a quarter leaf %.4f of %d\n", hits, fsame, fclose, both);
+    if (fsame < 0.995 || fclose < 0.99 || hits < n * n / 10)
+        fail_msg("eye (%g %g %g): hit/miss agree on %.4f (want >= 0.995), depth within a quarter leaf %.4f (want >= "
+                 "0.99), %d MLS hits",
+                 (double)eye.x, (double)eye.y, (double)eye.z, fsame, fclose, hits);
+    free(boxes);
+    sg_iso_destroy(iso);
+    sg_scene_destroy(scene);
+}
+
+static void test_iso_agrees_with_mls_sphere(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    check_agreement(&ps, sg_v3(1.5f, 1.0f, 3.0f));
+    sg_pointset_free(&ps);
+}
+
+/* A bumpy closed surface: the unit sphere's points pushed out by
+ * 0.15 sin(5x) sin(4y) sin(3z), normals from the gradient of the implicit
+ * |p| - 1 - bump(p/|p|), a shape with curvature of both signs. */
+static void test_iso_agrees_with_mls_bumpy(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 30000);
+    for (size_t i = 0; i < ps.count; ++i) {
+        sg_vec3 u = sg_v3(ps.px[i], ps.py[i], ps.pz[i]);
+        float b = 0.15f * sinf(5 * u.x) * sinf(4 * u.y) * sinf(3 * u.z);
+        sg_vec3 p = sg_v3_scale(u, 1.0f + b);
+        /* gradient of g(p) = |p| - 1 - bump(p / |p|) at p, by differences */
+        sg_vec3 g;
+        const float e = 1e-3f;
+        float gv[3];
+        for (int a = 0; a < 3; ++a) {
+            sg_vec3 q0 = p, q1 = p;
+            if (a == 0) { q0.x -= e; q1.x += e; }
+            if (a == 1) { q0.y -= e; q1.y += e; }
+            if (a == 2) { q0.z -= e; q1.z += e; }
+            sg_vec3 w0 = sg_v3_normalize(q0), w1 = sg_v3_normalize(q1);
+            float g0 = sg_v3_length(q0) - 1 - 0.15f * sinf(5 * w0.x) * sinf(4 * w0.y) * sinf(3 * w0.z);
+            float g1 = sg_v3_length(q1) - 1 - 0.15f * sinf(5 * w1.x) * sinf(4 * w1.y) * sinf(3 * w1.z);
+            gv[a] = (g1 - g0) / (2 * e);
+        }
+        g = sg_v3_normalize(sg_v3(gv[0], gv[1], gv[2]));
+        ps.px[i] = p.x; ps.py[i] = p.y; ps.pz[i] = p.z;
+        ps.nx[i] = g.x; ps.ny[i] = g.y; ps.nz[i] = g.z;
+    }
+    check_agreement(&ps, sg_v3(-2.0f, 1.5f, 2.5f));
+    sg_pointset_free(&ps);
+}
+
+/* 4. No holes in a closed sphere: every ray aimed at the centre from
+ * outside hits (20000 random directions). */
+static void test_iso_sphere_no_holes(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 50000);
+    sg_iso *iso = build_iso(&ps, 0);
+    uint64_t rng = 3;
+    int misses = 0;
+    for (int i = 0; i < 20000; ++i) {
+        sg_vec3 from = sg_v3_scale(random_dir(&rng), 3.0f);
+        sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            if (misses < 5)
+                fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
+            ++misses;
+        }
+    }
+    if (misses)
+        fail_msg("%d of 20000 rays at the centre missed", misses);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 5. No cracks: axis-parallel rays running exactly along leaf edges (the
+ * line shared by four cells) and within leaf faces, through the corners
+ * of stored leaves, all hit where the sphere is (the line passes at least
+ * 3 radii inside its silhouette) at the sphere's depth (tolerance of
+ * test 1 along the normal; the ray meets the surface at least as steeply
+ * as its silhouette margin allows: cos >= sqrt(1 - (1 - 3r)^2)). */
+static void test_iso_no_cracks_along_faces(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    sg_aabb *boxes = malloc(info.leaf_count * sizeof *boxes);
+    assert_non_null(boxes);
+    sg_iso_leaf_boxes(iso, boxes);
+    float pos_tol = r * r / 2.0f + 0.05f * r + r * r / 8.0f + info.f_scale;
+    float inner = 1.0f - 3.0f * r, cosmin = sqrtf(1.0f - inner * inner);
+    int rays = 0, misses = 0;
+    float worst = 0;
+    for (size_t l = 0; l < info.leaf_count; l += 7) {
+        sg_aabb b = boxes[l];
+        for (int axis = 0; axis < 3; ++axis)
+            for (int face = 0; face < 2; ++face) {
+                /* along an edge (corner lo), or along the middle of a face */
+                sg_vec3 q = b.lo;
+                if (face) {
+                    if (axis != 0) q.x = 0.5f * (b.lo.x + b.hi.x);
+                    else q.y = 0.5f * (b.lo.y + b.hi.y);
+                }
+                float c[3] = {q.x, q.y, q.z};
+                float rest2 = 0;
+                for (int a = 0; a < 3; ++a)
+                    if (a != axis) rest2 += c[a] * c[a];
+                if (rest2 > inner * inner)
+                    continue;
+                float side = c[axis] >= 0 ? 1.0f : -1.0f;
+                float oc[3] = {c[0], c[1], c[2]}, dc[3] = {0, 0, 0};
+                oc[axis] = 3.0f * side;
+                dc[axis] = -side;
+                sg_ray ray = make_ray(sg_v3(oc[0], oc[1], oc[2]), sg_v3(dc[0], dc[1], dc[2]), SG_RAY_FRONT_ONLY);
+                ++rays;
+                sg_hit hit;
+                if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+                    if (misses < 5)
+                        fprintf(stderr, "crack: ray from (%g %g %g) axis %d\n", (double)oc[0], (double)oc[1],
+                                (double)oc[2], axis);
+                    ++misses;
+                    continue;
+                }
+                float want = 3.0f - sqrtf(1.0f - rest2);
+                worst = fmaxf(worst, fabsf(hit.t - want) * cosmin);
+            }
+    }
+    printf("crack rays: %d, worst depth error along the normal %g (tol %g)\n", rays, (double)worst, (double)pos_tol);
+    if (misses || worst > pos_tol || rays < 1000)
+        fail_msg("%d of %d rays along leaf faces missed; worst depth error %g (tol %g)", misses, rays, (double)worst,
+                 (double)pos_tol);
+    free(boxes);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 6. Holes of the point set stay open: a plane with the splats of a disc
+ * of radius 6 r removed. The supports leave a gap of radius 5 r; the
+ * surface stops within one leaf (edge <= r) of its edge, so rays within
+ * 3 r of the centre miss, and rays 8 r out hit. */
+static void test_iso_holes_stay_open(void **state)
+{
+    (void)state;
+    sg_plane_points_desc pd = {.side = 120, .half = 1.0f};
+    sg_pointset full = {0}, ps = {0};
+    assert_int_equal(sg_points_make_plane(&pd, &full, NULL), SG_OK);
+    float r = max_radius(&full);
+    assert_int_equal(sg_pointset_alloc(&ps, full.count, NULL), SG_OK);
+    size_t k = 0;
+    for (size_t i = 0; i < full.count; ++i) {
+        if (full.px[i] * full.px[i] + full.pz[i] * full.pz[i] < 36.0f * r * r)
+            continue;
+        ps.px[k] = full.px[i]; ps.py[k] = full.py[i]; ps.pz[k] = full.pz[i];
+        ps.nx[k] = full.nx[i]; ps.ny[k] = full.ny[i]; ps.nz[k] = full.nz[i];
+        ps.radius[k] = full.radius[i];
+        ++k;
+    }
+    ps.count = k;
+    sg_iso *iso = build_iso(&ps, 0);
+    int bad_in = 0, bad_out = 0;
+    for (int i = 0; i < 64; ++i) {
+        float a = 2.0f * PI * (float)i / 64.0f;
+        for (int ring = 0; ring < 2; ++ring) {
+            float rad = ring ? 8.0f * r : 3.0f * r * (float)(i % 4) / 3.0f;
+            sg_ray ray = make_ray(sg_v3(rad * cosf(a), 1.0f, rad * sinf(a)), sg_v3(0, -1, 0), SG_RAY_ANY_FACE);
+            sg_hit hit;
+            int h = sg_iso_intersect(iso, &ray, &hit, NULL);
+            if (ring == 0 && h)
+                ++bad_in;
+            if (ring == 1 && !h)
+                ++bad_out;
+        }
+    }
+    if (bad_in || bad_out)
+        fail_msg("hole of radius 6r: %d of 64 rays inside 3r hit, %d of 64 rays at 8r missed", bad_in, bad_out);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+    sg_pointset_free(&full);
+}
+
+/* 7. Quantisation within its stated bound (iso.h): every corner of the
+ * sampled leaves against f and n̄ recomputed from all splats in index
+ * order (the build's bits: iso.h sg_iso_field), and the normal codec on
+ * random unit vectors. */
+static void test_iso_quantisation_bound(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 5000);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    sg_aabb *boxes = malloc(info.leaf_count * sizeof *boxes);
+    uint32_t *all = malloc(ps.count * sizeof *all);
+    assert_non_null(boxes);
+    assert_non_null(all);
+    for (size_t i = 0; i < ps.count; ++i)
+        all[i] = (uint32_t)i;
+    sg_iso_leaf_boxes(iso, boxes);
+    float worst_f = 0, worst_n = 0, fmax = 0;
+    for (size_t l = 0; l < info.leaf_count; l += 5) {
+        float f[8];
+        sg_vec3 n[8];
+        sg_iso_leaf_corners(iso, (uint32_t)l, f, n);
+        for (int c = 0; c < 8; ++c) {
+            sg_aabb b = boxes[l];
+            sg_vec3 x = sg_v3(c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z);
+            sg_vec3 nt;
+            float ft = sg_iso_field(&ps, all, ps.count, SG_KERNEL_HAT, x, &nt);
+            assert_false(isnan(ft)); /* stored corners are valid */
+            worst_f = fmaxf(worst_f, fabsf(ft - f[c]));
+            fmax = fmaxf(fmax, fabsf(ft));
+            worst_n = fmaxf(worst_n, angle(nt, n[c]));
+        }
+    }
+    float ftol = 0.5f * info.f_scale * (1.0f + 1e-5f) + 1e-6f * fmax;
+    uint64_t rng = 11;
+    float worst_codec = 0;
+    for (int i = 0; i < 200000; ++i) {
+        sg_vec3 n = random_dir(&rng);
+        sg_vec3 m = sg_iso_decode_normal(sg_iso_encode_normal(n));
+        worst_codec = fmaxf(worst_codec, angle(n, m));
+    }
+    /* axis and octant-fold directions, where the codec is most strained */
+    const sg_vec3 special[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0.7071068f, 0, -0.7071068f}};
+    for (size_t i = 0; i < sizeof special / sizeof *special; ++i) {
+        sg_vec3 m = sg_iso_decode_normal(sg_iso_encode_normal(special[i]));
+        worst_codec = fmaxf(worst_codec, angle(special[i], m));
+    }
+    printf("quantisation: worst |df| %g (bound %g, f_scale %g), worst normal %g, codec %g (bound %g)\n",
+           (double)worst_f, (double)ftol, (double)info.f_scale, (double)worst_n, (double)worst_codec,
+           (double)SG_ISO_NORMAL_EPS);
+    /* the corners' normals: the codec's bound plus float rounding of the
+     * normalisation (a few ulps) */
+    float ntol = SG_ISO_NORMAL_EPS + 1e-6f;
+    if (worst_f > ftol || worst_n > ntol || worst_codec > SG_ISO_NORMAL_EPS)
+        fail_msg("quantisation: |df| %g (bound %g), corner normal %g (bound %g), codec %g (bound %g)", (double)worst_f,
+                 (double)ftol, (double)worst_n, (double)ntol, (double)worst_codec, (double)SG_ISO_NORMAL_EPS);
+    free(all);
+    free(boxes);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 8. Face flags: from the centre of a sphere, FRONT_ONLY sees no entry
+ * (misses), BACK_ONLY and ANY_FACE hit the inside at distance ~1; from
+ * outside, BACK_ONLY passes the near side and hits the far one (t ~ 4). */
+static void test_iso_face_flags(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    sg_iso *iso = build_iso(&ps, 0);
+    uint64_t rng = 5;
+    int bad = 0;
+    for (int i = 0; i < 500; ++i) {
+        sg_vec3 d = random_dir(&rng);
+        sg_hit h;
+        sg_ray front = make_ray(sg_v3(0, 0, 0), d, SG_RAY_FRONT_ONLY);
+        sg_ray back = make_ray(sg_v3(0, 0, 0), d, SG_RAY_BACK_ONLY);
+        sg_ray any = make_ray(sg_v3(0, 0, 0), d, SG_RAY_ANY_FACE);
+        sg_ray far = make_ray(sg_v3_scale(d, -2.0f), d, SG_RAY_BACK_ONLY);
+        bad += sg_iso_intersect(iso, &front, &h, NULL);
+        bad += sg_iso_occluded(iso, &front, NULL);
+        bad += !(sg_iso_intersect(iso, &back, &h, NULL) && fabsf(h.t - 1.0f) < 0.01f && sg_v3_dot(h.n, d) > 0);
+        bad += !(sg_iso_intersect(iso, &any, &h, NULL) && fabsf(h.t - 1.0f) < 0.01f);
+        bad += !(sg_iso_intersect(iso, &far, &h, NULL) && fabsf(h.t - 3.0f) < 0.01f && sg_v3_dot(h.n, d) > 0);
+        bad += !sg_iso_occluded(iso, &back, NULL);
+    }
+    if (bad)
+        fail_msg("%d of 3000 face-flag checks failed", bad);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 9. One thread and two build the same bytes (the parts are laid out in
+ * a fixed order; a grid point's f is the same sum whichever cell asks). */
+static void test_iso_threads_identical(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 30000);
+    sg_iso *a = build_iso(&ps, 1), *b = build_iso(&ps, 2);
+    sg_iso_info ia, ib;
+    sg_iso_get_info(a, &ia);
+    sg_iso_get_info(b, &ib);
+    uint64_t ca = sg_iso_checksum(a), cb = sg_iso_checksum(b);
+    if (ca != cb || ia.leaf_count != ib.leaf_count || ia.corner_count != ib.corner_count)
+        fail_msg("1 thread: %zu leaves %zu corners checksum %016llx; 2 threads: %zu leaves %zu corners %016llx",
+                 ia.leaf_count, ia.corner_count, (unsigned long long)ca, ib.leaf_count, ib.corner_count,
+                 (unsigned long long)cb);
+    sg_iso_destroy(a);
+    sg_iso_destroy(b);
+    sg_pointset_free(&ps);
+}
+
+/* 10. Bad input is a status with a message; out untouched. */
+static void test_iso_rejects_bad_input(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 100);
+    sg_iso *iso = (sg_iso *)(uintptr_t)1;
+    sg_error err = {0};
+    assert_int_equal(sg_iso_create(NULL, NULL, &iso, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "points"));
+    sg_iso_desc d = {.max_depth = 1};
+    assert_int_equal(sg_iso_create(&d, &ps, &iso, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "max_depth"));
+    d = (sg_iso_desc){.tolerance = NAN};
+    assert_int_equal(sg_iso_create(&d, &ps, &iso, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "tolerance"));
+    ps.radius[3] = NAN;
+    assert_int_equal(sg_iso_create(NULL, &ps, &iso, &err), SG_ERR_INVALID_ARG);
+    assert_ptr_equal(iso, (sg_iso *)(uintptr_t)1);
+    sg_pointset_free(&ps);
+}
+
+/* 11. Out of memory at each allocation in turn: SG_OK or a clean
+ * SG_ERR_NOMEM with nothing left allocated. */
+static void test_iso_alloc_faults(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 60); /* small: one build per allocation counted */
+    long live = sg_alloc__live();
+    for (long n = 0;; ++n) {
+        sg_iso *iso = NULL;
+        sg_error err = {0};
+        sg_iso_desc d = {.threads = 1, .max_depth = 5};
+        sg_alloc__fail_after(n);
+        sg_status st = sg_iso_create(&d, &ps, &iso, &err);
+        sg_alloc__fail_after(-1);
+        if (st == SG_OK) {
+            sg_iso_destroy(iso);
+            assert_int_equal(sg_alloc__live(), live);
+            break;
+        }
+        if (st != SG_ERR_NOMEM)
+            fail_msg("allocation %ld failed: %s (%s)", n, sg_status_name(st), err.message);
+        assert_int_equal(sg_alloc__live(), live);
+        assert_true(n < 100000);
+    }
+    sg_pointset_free(&ps);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_iso_sphere_accuracy),
+        cmocka_unit_test(test_iso_plane_exact),
+        cmocka_unit_test(test_iso_agrees_with_mls_sphere),
+        cmocka_unit_test(test_iso_agrees_with_mls_bumpy),
+        cmocka_unit_test(test_iso_sphere_no_holes),
+        cmocka_unit_test(test_iso_no_cracks_along_faces),
+        cmocka_unit_test(test_iso_holes_stay_open),
+        cmocka_unit_test(test_iso_quantisation_bound),
+        cmocka_unit_test(test_iso_face_flags),
+        cmocka_unit_test(test_iso_threads_identical),
+        cmocka_unit_test(test_iso_rejects_bad_input),
+        cmocka_unit_test(test_iso_alloc_faults),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
