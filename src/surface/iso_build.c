@@ -234,6 +234,18 @@ static inline float patch_at(const float v[8], int a, int b, int cz)
     return y0 + (y1 - y0) * s;
 }
 
+/* Appends an inner node with children kids; its ref (REF_EMPTY and
+ * *nomem set when out of memory). */
+static uint32_t push_node(tnode **nodes, size_t *nn, size_t *ncap, const uint32_t kids[8], int *nomem)
+{
+    if (!grow((void **)nodes, ncap, *nn + 1, sizeof **nodes)) {
+        *nomem = 1;
+        return REF_EMPTY;
+    }
+    memcpy((*nodes)[*nn].child, kids, 8 * sizeof *kids);
+    return (uint32_t)(*nn)++;
+}
+
 /* Builds the cell at (x, y, z), level `level`, whose splat list is
  * scratch[off..off+n); returns its ref. */
 static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, uint32_t z, int level, size_t off,
@@ -363,14 +375,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
             return REF_EMPTY;
         any |= kids[k] != REF_EMPTY;
     }
-    if (!any)
-        return REF_EMPTY;
-    if (!grow((void **)&P->nodes, &P->ncap, P->nn + 1, sizeof *P->nodes)) {
-        P->nomem = 1;
-        return REF_EMPTY;
-    }
-    memcpy(P->nodes[P->nn].child, kids, sizeof kids);
-    return (uint32_t)P->nn++;
+    return any ? push_node(&P->nodes, &P->nn, &P->ncap, kids, &P->nomem) : REF_EMPTY;
 }
 
 static void part_free(part *P)
@@ -445,12 +450,7 @@ static uint32_t split_top(const build_ctx *c, top *T, uint32_t x, uint32_t y, ui
     sg_free(sub);
     if (T->nomem || !any)
         return REF_EMPTY;
-    if (!grow((void **)&T->nodes, &T->ncap, T->nn + 1, sizeof *T->nodes)) {
-        T->nomem = 1;
-        return REF_EMPTY;
-    }
-    memcpy(T->nodes[T->nn].child, kids, sizeof kids);
-    return (uint32_t)T->nn++;
+    return push_node(&T->nodes, &T->nn, &T->ncap, kids, &T->nomem);
 }
 
 /* ---- layout ---------------------------------------------------------------- */
