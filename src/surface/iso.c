@@ -46,6 +46,11 @@ static const float CARRY_EPS = 1e-5f;
 
 enum { STACK_MAX = 8 * ISO_MAX_DEPTH + 8 };
 
+/* min/max that keep the first argument when the second is NaN, and compile
+ * to one instruction (fminf/fmaxf are library calls under -std=c11). */
+static inline float max2(float a, float b) { return b > a ? b : a; }
+static inline float min2(float a, float b) { return b < a ? b : a; }
+
 void sg_iso_destroy(sg_iso *iso)
 {
     if (!iso)
@@ -407,8 +412,8 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             continue;
         }
         float ta = (p0 - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
-        t0 = fmaxf(t0, fminf(ta, tb));
-        t1 = fminf(t1, fmaxf(ta, tb));
+        t0 = max2(t0, min2(ta, tb));
+        t1 = min2(t1, max2(ta, tb));
     }
     if (!(t0 <= t1))
         goto out;
@@ -443,10 +448,10 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
                 continue;
             }
             float ta = (p0 - od[a]) * inv[a], tm = (pm - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
-            ilo[a][0] = fminf(ta, tm);
-            ihi[a][0] = fmaxf(ta, tm);
-            ilo[a][1] = fminf(tm, tb);
-            ihi[a][1] = fmaxf(tm, tb);
+            ilo[a][0] = min2(ta, tm);
+            ihi[a][0] = max2(ta, tm);
+            ilo[a][1] = min2(tm, tb);
+            ihi[a][1] = max2(tm, tb);
         }
         unsigned inner_mask = N->child_mask & ~N->leaf_mask;
         for (int j = 7; j >= 0; --j) {
@@ -454,8 +459,8 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             if (!(N->child_mask >> k & 1u))
                 continue;
             int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-            float c0 = fmaxf(fmaxf(e.t0, ilo[0][bx]), fmaxf(ilo[1][by], ilo[2][bz]));
-            float c1 = fminf(fminf(e.t1, ihi[0][bx]), fminf(ihi[1][by], ihi[2][bz]));
+            float c0 = max2(max2(e.t0, ilo[0][bx]), max2(ilo[1][by], ilo[2][bz]));
+            float c1 = min2(min2(e.t1, ihi[0][bx]), min2(ihi[1][by], ihi[2][bz]));
             if (!(c0 <= c1))
                 continue;
             unsigned below = (1u << k) - 1u;

@@ -17,7 +17,12 @@
  *         followed to the edge of the supports, two levels finer), or
  *      c. the trilinear patch of its corner values departs from f at the
  *         19 test points (centre, face centres, edge midpoints: the
- *         children's corners) by more than tolerance x r_min.
+ *         children's corners) by more than tolerance x r_min, or one of
+ *         them is invalid;
+ *    rules b and c stop two levels below rule a's bound (edge <=
+ *    leaf_radii x r_min / 4): f has kinks no patch fits (the kernel's
+ *    support edges, opposed normals cancelling) and would otherwise be
+ *    chased down to max_depth.
  *    Corners store the normalised field
  *         f(x) = F(x) / (W(x) |sum w_i n_i|) = (x - p̄(x)) . n̄(x),
  *    the signed distance to the local MLS plane (same zero set and signs

@@ -34,6 +34,15 @@
 
 enum { TOP_LEVELS = 3 }; /* serial split into up to 512 tasks */
 
+/* The smallest leaf edge rules b and c may ask for, in units of
+ * leaf_radii x r_min: two levels below rule a's bound. */
+static const float FINE_EDGE = 0.25f;
+
+/* A cell whose corners all have one sign and |f| above this many of its
+ * diagonals is dropped without the rule c test (f grows about as fast as
+ * the distance to the surface; 1.5 leaves margin for curvature). */
+static const float DROP_DIAGONALS = 1.5f;
+
 #define REF_EMPTY 0xFFFFFFFFu
 #define REF_LEAF 0x80000000u
 
@@ -114,9 +123,13 @@ static int grow(void **p, size_t *cap, size_t need, size_t size)
 /* Squared distance from p to the box [a, b]. */
 static inline float dist2_box(sg_vec3 p, sg_vec3 a, sg_vec3 b)
 {
-    float dx = fmaxf(fmaxf(a.x - p.x, p.x - b.x), 0.0f);
-    float dy = fmaxf(fmaxf(a.y - p.y, p.y - b.y), 0.0f);
-    float dz = fmaxf(fmaxf(a.z - p.z, p.z - b.z), 0.0f);
+    /* ternaries: fmaxf is a library call under -std=c11 */
+    float dx = a.x - p.x > p.x - b.x ? a.x - p.x : p.x - b.x;
+    float dy = a.y - p.y > p.y - b.y ? a.y - p.y : p.y - b.y;
+    float dz = a.z - p.z > p.z - b.z ? a.z - p.z : p.z - b.z;
+    dx = dx > 0.0f ? dx : 0.0f;
+    dy = dy > 0.0f ? dy : 0.0f;
+    dz = dz > 0.0f ? dz : 0.0f;
     return dx * dx + dy * dy + dz * dz;
 }
 
@@ -221,6 +234,18 @@ static inline float patch_at(const float v[8], int a, int b, int cz)
     return y0 + (y1 - y0) * s;
 }
 
+/* Appends an inner node with children kids; its ref (REF_EMPTY and
+ * *nomem set when out of memory). */
+static uint32_t push_node(tnode **nodes, size_t *nn, size_t *ncap, const uint32_t kids[8], int *nomem)
+{
+    if (!grow((void **)nodes, ncap, *nn + 1, sizeof **nodes)) {
+        *nomem = 1;
+        return REF_EMPTY;
+    }
+    memcpy((*nodes)[*nn].child, kids, 8 * sizeof *kids);
+    return (uint32_t)(*nn)++;
+}
+
 /* Builds the cell at (x, y, z), level `level`, whose splat list is
  * scratch[off..off+n); returns its ref. */
 static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, uint32_t z, int level, size_t off,
@@ -253,10 +278,28 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
             fv[k] = P->pf[cs[k]];
             valid += !isnan(fv[k]);
         }
+        /* rules b and c refine at most FINE_LEVELS levels below rule a's
+         * size: f has kinks (the kernels' support edges, opposed normals
+         * cancelling) that no patch fits, which would otherwise be chased
+         * down to max_depth */
+        int fine = can_split && edge > FINE_EDGE * c->leaf_radii * r_min;
+        if (valid == 8) {
+            /* f is close to a distance (|grad f| ~ 1 near the surface):
+             * corners of one sign all farther than the cell's diagonal
+             * from it leave no zero inside; drop the cell unexamined */
+            float near = INFINITY, lo = fv[0], hi = fv[0];
+            for (int k = 0; k < 8; ++k) {
+                near = fminf(near, fabsf(fv[k]));
+                lo = fminf(lo, fv[k]);
+                hi = fmaxf(hi, fv[k]);
+            }
+            if ((lo > 0.0f || hi < 0.0f) && near > DROP_DIAGONALS * 1.7320508f * edge)
+                return REF_EMPTY;
+        }
         if (valid < 8) {
             /* rule b: follow the surface towards the supports' edge */
-            split = can_split && valid > 0 && edge > 0.25f * c->leaf_radii * r_min;
-        } else if (can_split) {
+            split = fine && valid > 0;
+        } else if (fine) {
             /* rule c over the 19 lattice points that are not corners */
             for (int q = 0; q < 27 && !split; ++q) {
                 int ga = q % 3, gb = (q / 3) % 3, gc = q / 9;
@@ -332,14 +375,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
             return REF_EMPTY;
         any |= kids[k] != REF_EMPTY;
     }
-    if (!any)
-        return REF_EMPTY;
-    if (!grow((void **)&P->nodes, &P->ncap, P->nn + 1, sizeof *P->nodes)) {
-        P->nomem = 1;
-        return REF_EMPTY;
-    }
-    memcpy(P->nodes[P->nn].child, kids, sizeof kids);
-    return (uint32_t)P->nn++;
+    return any ? push_node(&P->nodes, &P->nn, &P->ncap, kids, &P->nomem) : REF_EMPTY;
 }
 
 static void part_free(part *P)
@@ -414,12 +450,7 @@ static uint32_t split_top(const build_ctx *c, top *T, uint32_t x, uint32_t y, ui
     sg_free(sub);
     if (T->nomem || !any)
         return REF_EMPTY;
-    if (!grow((void **)&T->nodes, &T->ncap, T->nn + 1, sizeof *T->nodes)) {
-        T->nomem = 1;
-        return REF_EMPTY;
-    }
-    memcpy(T->nodes[T->nn].child, kids, sizeof kids);
-    return (uint32_t)T->nn++;
+    return push_node(&T->nodes, &T->nn, &T->ncap, kids, &T->nomem);
 }
 
 /* ---- layout ---------------------------------------------------------------- */
