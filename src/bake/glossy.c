@@ -156,9 +156,7 @@ sg_status sg_glossy_bake(const sg_world *w, const sg_bake *b, uint32_t m, const 
             uint32_t i = splats[s];
             sg_vec3 nrm = sg_sites_normal(ps, i), t, bt;
             sg_v3_basis(nrm, &t, &bt);
-            sg_world_hit h = {.hit = {.t = 0.0f, .p = sg_sites_position(ps, i), .n = nrm, .splat = i,
-                                      .leaf = UINT32_MAX},
-                              .model = m};
+            sg_world_hit h = {.hit = sg_scene_site_hit(sg_world_scene(w, m), i), .model = m};
             uint64_t key = key_base + i;
             memset(acc, 0, stride * sizeof *acc);
             for (int r = 0; r < rays; ++r) {

@@ -177,7 +177,7 @@ static sg_world_hit site_on_surface(const sg_world *w, uint32_t m, uint32_t spla
     const sg_sites *ps = sg_scene_sites(sc);
     sg_vec3 p = sg_sites_position(ps, splat), n = sg_sites_normal(ps, splat);
     float r = ps->radius[splat];
-    sg_world_hit self = {.hit = {.t = 0.0f, .p = p, .n = n, .splat = splat, .leaf = UINT32_MAX}, .model = m};
+    sg_world_hit self = {.hit = sg_scene_site_hit(sc, splat), .model = m};
     sg_ray down = {.org = sg_v3_madd(p, n, r), .dir = sg_v3_scale(n, -1.0f), .tmin = 0.0f, .tmax = 2.0f * r,
                    .flags = SG_RAY_FRONT_ONLY};
     sg_hit h;

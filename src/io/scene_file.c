@@ -456,9 +456,11 @@ static sg_status parse_material(const ctx *c, const cJSON *obj, const char *jp, 
 
 static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, sg_scene_desc *d)
 {
-    static const char *const keys[] = {"model", "kernel", "samples_per_cell", "refinements"};
-    static const char *const models[] = {"mls", "disk"};
-    static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK};
+    static const char *const keys[] = {"model", "kernel", "samples_per_cell", "refinements", "iso_tolerance",
+                                       "iso_max_depth"};
+    static const char *const models[] = {"mls", "disk", "iso"};
+    static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK, SG_SURFACE_ISO};
+    static const range TOLERANCE = {0.0, 10.0, 1, 0};
     static const char *const kernels[] = {"hat", "gaussian"};
     static const int kernel_values[] = {SG_KERNEL_HAT, SG_KERNEL_GAUSSIAN};
     static const char *const refs[] = {"shrink", "encourage", "collapse"};
@@ -473,6 +475,10 @@ static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, s
     d->kernel = (sg_kernel)kernel;
     if (st == SG_OK)
         st = get_int(c, obj, jp, "samples_per_cell", 1, 1024, &d->samples_per_cell);
+    if (st == SG_OK)
+        st = get_float(c, obj, jp, "iso_tolerance", TOLERANCE, &d->iso_tolerance);
+    if (st == SG_OK)
+        st = get_int(c, obj, jp, "iso_max_depth", 2, 20, &d->iso_max_depth);
     const cJSON *r = member(obj, "refinements");
     if (st == SG_OK && r) {
         char rp[JP_MAX];
@@ -981,6 +987,10 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
             h_f32(&h, m->surface.max_sample_spacing);
             h_u64(&h, (uint64_t)(int64_t)m->surface.max_depth);
             h_f32(&h, m->surface.blend_depth);
+            if (m->surface.model == SG_SURFACE_ISO) { /* MLS and disk scenes keep their hashes */
+                h_f32(&h, m->surface.iso_tolerance);
+                h_u64(&h, (uint64_t)(int64_t)m->surface.iso_max_depth);
+            }
         }
     }
     if (parts & SG_SCENE_HASH_ENV) {

@@ -53,9 +53,11 @@
  *           "use_point_colors": true   albedo multiplies the points' colours
  *         },
  *         "surface": {           see surface/scene.h
- *           "model": "mls",      "mls" | "disk"
+ *           "model": "mls",      "mls" | "disk" | "iso"
  *           "kernel": "hat",     "hat" | "gaussian"
  *           "samples_per_cell": 8,      [1, 1024]
+ *           "iso_tolerance": 0.05,      (0, 10] smallest radii (iso.h)
+ *           "iso_max_depth": 16,        [2, 20]
  *           "refinements": {"shrink": true, "encourage": true, "collapse": true}
  *         }
  *       } ],

@@ -79,9 +79,14 @@ static cJSON *model_json(const sg_scene_model *m)
     cJSON_AddItemToObject(mat, "emission", vec(m->material.emission));
     cJSON_AddBoolToObject(mat, "use_point_colors", m->material.use_point_colors);
     cJSON *sur = cJSON_AddObjectToObject(o, "surface");
-    cJSON_AddStringToObject(sur, "model", m->surface.model == SG_SURFACE_DISK ? "disk" : "mls");
+    static const char *const model_names[] = {"mls", "disk", "iso"};
+    cJSON_AddStringToObject(sur, "model", model_names[m->surface.model]);
     cJSON_AddStringToObject(sur, "kernel", m->surface.kernel == SG_KERNEL_GAUSSIAN ? "gaussian" : "hat");
     cJSON_AddNumberToObject(sur, "samples_per_cell", m->surface.samples_per_cell);
+    if (m->surface.iso_tolerance > 0.0f)
+        cJSON_AddItemToObject(sur, "iso_tolerance", num(m->surface.iso_tolerance));
+    if (m->surface.iso_max_depth > 0)
+        cJSON_AddNumberToObject(sur, "iso_max_depth", m->surface.iso_max_depth);
     cJSON *r = cJSON_AddObjectToObject(sur, "refinements");
     cJSON_AddBoolToObject(r, "shrink", !(m->surface.kd_disable & SG_KD_NO_SHRINK));
     cJSON_AddBoolToObject(r, "encourage", !(m->surface.kd_disable & SG_KD_NO_ENCOURAGE));

@@ -209,7 +209,7 @@ sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, 
         note_points(d, i, m, &rep, ps.count);
         transform_points(&m->transform, &ps);
         say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1,
-            sf->model_count, model_label(m), m->surface.model == SG_SURFACE_DISK ? "disk" : "MLS", ps.count);
+            sf->model_count, model_label(m), m->surface.model == SG_SURFACE_DISK ? "disk" : m->surface.model == SG_SURFACE_ISO ? "ISO" : "MLS", ps.count);
         st = sg_scene_create(&m->surface, &ps, &w->scenes[i], err);
         sg_pointset_free(&ps);
         if (st != SG_OK)

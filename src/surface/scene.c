@@ -23,6 +23,8 @@
 #include "accel/kdtree.h"
 #include "core/alloc.h"
 #include "surface/disk.h"
+#include "surface/iso.h"
+#include "surface/iso_sites.h"
 #include "surface/mls.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
@@ -39,6 +41,8 @@ struct sg_scene {
     sg_scene_desc desc;   /* with defaults filled in                        */
     sg_pointset points;   /* own copy of the input                          */
     sg_sites sites;       /* the light sites: a view of the splats          */
+    sg_iso *iso;          /* SG_SURFACE_ISO: the octree (no kd-tree then)   */
+    sg_iso_sites iso_sites; /* ...and its corners as light sites            */
     sg_kdtree tree;
     sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
     sg_mls_params mls;
@@ -208,6 +212,42 @@ static sg_status layer_keys(sg_scene *sc, sg_error *err)
     return SG_OK;
 }
 
+/* SG_SURFACE_ISO: the octree over the scene's own points, its corners as
+ * the light sites, and the scene's info from the octree's. */
+static sg_status create_iso(sg_scene *sc, sg_error *err)
+{
+    const sg_scene_desc *d = &sc->desc;
+    sg_iso_desc id = {.kernel = d->kernel, .max_depth = d->iso_max_depth, .tolerance = d->iso_tolerance,
+                      .threads = d->threads};
+    sg_status st = sg_iso_create(&id, &sc->points, &sc->iso, err);
+    if (st == SG_OK)
+        st = sg_iso_sites_create(sc->iso, &sc->points, &sc->iso_sites, err);
+    if (st != SG_OK)
+        return st;
+    sc->sites = sc->iso_sites.view;
+    sg_iso_info ii;
+    sg_iso_get_info(sc->iso, &ii);
+    sg_scene_info *in = &sc->info;
+    in->splat_count = sc->points.count;
+    in->node_count = ii.node_count + ii.leaf_count;
+    in->leaf_count = ii.leaf_count;
+    in->depth = ii.depth;
+    /* The splats' supports, as for the other models (the ISO's root cube
+     * is larger). */
+    sg_aabb b = sg_aabb_empty();
+    const sg_pointset *p = &sc->points;
+    for (size_t i = 0; i < p->count; ++i) {
+        float r = p->radius[i];
+        b = sg_aabb_union(b, (sg_aabb){{p->px[i] - r, p->py[i] - r, p->pz[i] - r},
+                                       {p->px[i] + r, p->py[i] + r, p->pz[i] + r}});
+    }
+    in->bounds = b;
+    in->diagonal = sg_aabb_diagonal(b);
+    in->memory_bytes = sizeof *sc + ii.memory_bytes + sg_iso_sites_memory(&sc->iso_sites) +
+                       p->count * 10 * sizeof(float);
+    return SG_OK;
+}
+
 sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, sg_scene **out, sg_error *err)
 {
     double t_start = omp_get_wtime();
@@ -219,7 +259,7 @@ sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, 
     if (st != SG_OK)
         return st;
     sg_scene_desc d = with_defaults(desc);
-    if (d.model != SG_SURFACE_MLS && d.model != SG_SURFACE_DISK)
+    if (d.model != SG_SURFACE_MLS && d.model != SG_SURFACE_DISK && d.model != SG_SURFACE_ISO)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: unknown surface model %d", (int)d.model);
     if (d.kernel != SG_KERNEL_HAT && d.kernel != SG_KERNEL_GAUSSIAN)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: unknown kernel %d", (int)d.kernel);
@@ -232,6 +272,13 @@ sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, 
     if ((st = sg_pointset_append(&sc->points, points, err)) != SG_OK)
         goto fail;
     sc->sites = sg_sites_of_pointset(&sc->points);
+    if (d.model == SG_SURFACE_ISO) {
+        if ((st = create_iso(sc, err)) != SG_OK)
+            goto fail;
+        sc->info.build_seconds = omp_get_wtime() - t_start;
+        *out = sc;
+        return SG_OK;
+    }
     size_t n = points->count;
     for (int k = 0; k < 6; ++k)
         if (!(box[k] = sg_alloc_array(n, sizeof(float)))) {
@@ -321,6 +368,8 @@ void sg_scene_destroy(sg_scene *sc)
     if (!sc)
         return;
     sg_pointset_free(&sc->points);
+    sg_iso_sites_free(&sc->iso_sites);
+    sg_iso_destroy(sc->iso);
     sg_kdtree_free(&sc->tree);
     free_soa(&sc->soa);
     sg_free(sc);
@@ -440,11 +489,15 @@ static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, flo
 
 int sg_scene_hit_sites(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
+    if (sc->iso)
+        return sg_iso_hit_sites(sc->iso, &sc->iso_sites, hit, ids, weights, max);
     return hit_weights(sc, hit, ids, weights, max, 1);
 }
 
 int sg_scene_hit_sites_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
+    if (sc->iso)
+        return sg_iso_hit_sites(sc->iso, &sc->iso_sites, hit, ids, weights, max);
     return hit_weights(sc, hit, ids, weights, max, 0);
 }
 
@@ -454,8 +507,18 @@ const sg_sites *sg_scene_sites(const sg_scene *sc) { return &sc->sites; }
 
 uint32_t sg_scene_hit_site(const sg_scene *sc, const sg_hit *hit)
 {
-    (void)sc;
+    if (sc->iso)
+        return sg_iso_hit_site(sc->iso, &sc->iso_sites, hit);
     return hit->splat;
+}
+
+sg_hit sg_scene_site_hit(const sg_scene *sc, uint32_t site)
+{
+    const sg_sites *s = &sc->sites;
+    assert(site < s->count);
+    uint32_t splat = sc->iso ? sc->iso_sites.splat[site] : site;
+    return (sg_hit){.t = 0.0f, .p = sg_sites_position(s, site), .n = sg_sites_normal(s, site), .splat = splat,
+                    .leaf = UINT32_MAX};
 }
 
 sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
@@ -854,7 +917,8 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     {
         for (unsigned m = mask; m; m &= m - 1) {
             int r = __builtin_ctz(m);
-            if (nearest(sc, &rays[r], &hits[r], stats))
+            if (sc->iso ? sg_iso_intersect(sc->iso, &rays[r], &hits[r], stats)
+                        : nearest(sc, &rays[r], &hits[r], stats))
                 found |= 1u << r;
         }
     }
@@ -865,10 +929,14 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
 
 int sg_scene_intersect(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
 {
+    if (sc->iso)
+        return sg_iso_intersect(sc->iso, ray, hit, stats);
     return nearest(sc, ray, hit, stats);
 }
 
 int sg_scene_occluded(const sg_scene *sc, const sg_ray *ray, sg_ray_stats *stats)
 {
+    if (sc->iso)
+        return sg_iso_occluded(sc->iso, ray, stats);
     return traverse(sc, ray, NULL, stats, QUERY_ANY);
 }

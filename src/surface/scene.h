@@ -43,7 +43,9 @@ typedef struct sg_scene sg_scene; /* opaque */
 
 typedef enum sg_surface_model {
     SG_SURFACE_MLS = 0,  /* implicit moving-least-squares surface (default) */
-    SG_SURFACE_DISK = 1  /* disk splats with deep blending                  */
+    SG_SURFACE_DISK = 1, /* disk splats with deep blending                  */
+    SG_SURFACE_ISO = 2   /* the MLS surface sampled into an implicit surface
+                            octree (iso.h); light sites at its corners     */
 } sg_surface_model;
 
 typedef enum sg_kernel {
@@ -74,6 +76,9 @@ typedef struct sg_scene_desc {
     float blend_depth;         /* DISK: blending window, in units of the hit
                                   splat's radius; default 0.5                  */
     int threads;               /* build threads; 0 = OpenMP default             */
+    float iso_tolerance;       /* ISO: patch error allowed, in smallest radii;
+                                  default 0.05 (iso.h)                         */
+    int iso_max_depth;         /* ISO: deepest leaf level; default 16           */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */
@@ -132,6 +137,11 @@ const sg_sites *sg_scene_sites(const sg_scene *scene);
  * entries (the largest weights) and returns the count; falls back to the
  * hit's dominant splat with weight 1. */
 int sg_scene_hit_sites(const sg_scene *scene, const sg_hit *hit, uint32_t *ids, float *weights, int max);
+
+/* A hit at site `site` (t = 0, its position and normal, no leaf), naming
+ * the splat that gives the site its colour and its self-test radius: the
+ * hit a bake spawns a site's rays from. MLS and disks: splat = site. */
+sg_hit sg_scene_site_hit(const sg_scene *scene, uint32_t site);
 
 /* The hit's dominant site: the one with the largest weight (MLS and
  * disks: hit->splat). Per-site data of what a ray hit (a bake's transport
