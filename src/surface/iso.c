@@ -376,8 +376,10 @@ typedef struct stack_entry {
     uint32_t x, y, z;
     float t0, t1;
     uint8_t level;
-    uint8_t is_leaf;
+    uint8_t is_leaf; /* CELL_NODE, CELL_LEAF or CELL_POSITIVE */
 } stack_entry;
+
+enum { CELL_NODE = 0, CELL_LEAF = 1, CELL_POSITIVE = 2 };
 
 /* Front-to-back traversal; the first accepted crossing (see file note). */
 static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
@@ -424,6 +426,11 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
         stack_entry e = st[--sp];
         nodes++;
         uint32_t size = 1u << (iso->max_depth - e.level);
+        if (e.is_leaf == CELL_POSITIVE) { /* in front of the surface (iso_int.h pos_mask) */
+            rs.outside = 1;
+            rs.carry = 0;
+            continue;
+        }
         if (e.is_leaf) {
             leaves++;
             if (leaf_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
@@ -454,9 +461,11 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             ihi[a][1] = max2(tm, tb);
         }
         unsigned inner_mask = N->child_mask & ~N->leaf_mask;
+        /* positive cells matter only to rays accepting either face */
+        unsigned visit = N->child_mask | (rs.either ? N->pos_mask : 0u);
         for (int j = 7; j >= 0; --j) {
             unsigned k = (unsigned)j ^ octant;
-            if (!(N->child_mask >> k & 1u))
+            if (!(visit >> k & 1u))
                 continue;
             int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
             float c0 = max2(max2(e.t0, ilo[0][bx]), max2(ilo[1][by], ilo[2][bz]));
@@ -466,9 +475,11 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             unsigned below = (1u << k) - 1u;
             stack_entry ce = {0, base[0] + (bx ? hs : 0), base[1] + (by ? hs : 0), base[2] + (bz ? hs : 0), c0, c1,
                               (uint8_t)(e.level + 1), 0};
-            if (N->leaf_mask >> k & 1u) {
+            if (!(N->child_mask >> k & 1u)) {
+                ce.is_leaf = CELL_POSITIVE;
+            } else if (N->leaf_mask >> k & 1u) {
                 ce.index = N->leaf_base + (uint32_t)popcount8(N->leaf_mask & below);
-                ce.is_leaf = 1;
+                ce.is_leaf = CELL_LEAF;
             } else {
                 ce.index = N->inner_base + (uint32_t)popcount8(inner_mask & below);
             }

@@ -20,8 +20,9 @@
  *     (min < 0 < max, or a zero beside a non-zero);
  *  2. a corner key (integer coordinates at max_depth) names one stored
  *     corner; leaves sharing a grid point share its index;
- *  3. nodes[0] is the root; every stored inner node has a non-empty
- *     child_mask, and leaf_mask is a subset of child_mask.
+ *  3. nodes[0] is the root; every stored inner node has a child or a
+ *     positive cell (child_mask | pos_mask non-zero), leaf_mask is a subset
+ *     of child_mask and pos_mask is disjoint from it.
  */
 #include <assert.h>
 #include <math.h>
@@ -44,6 +45,10 @@ static const float FINE_EDGE = 0.25f;
 static const float DROP_DIAGONALS = 1.5f;
 
 #define REF_EMPTY 0xFFFFFFFFu
+/* A cell without a surface whose corners are all valid and positive (in
+ * front of the surface): not stored, but its bit in the parent's pos_mask
+ * tells a ray accepting either face that it is outside (iso_int.h). */
+#define REF_POSITIVE 0xFFFFFFFEu
 #define REF_LEAF 0x80000000u
 
 /* Slack of the ball-touches-box test: a splat whose kernel is non-zero at a
@@ -294,7 +299,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
                 hi = fmaxf(hi, fv[k]);
             }
             if ((lo > 0.0f || hi < 0.0f) && near > DROP_DIAGONALS * 1.7320508f * edge)
-                return REF_EMPTY;
+                return lo > 0.0f ? REF_POSITIVE : REF_EMPTY;
         }
         if (valid < 8) {
             /* rule b: follow the surface towards the supports' edge */
@@ -325,7 +330,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
                 hi = fmaxf(hi, fv[k]);
             }
             if (!(lo <= 0.0f && hi >= 0.0f && (lo < 0.0f || hi > 0.0f)))
-                return REF_EMPTY; /* no zero in the patch (invariant 1) */
+                return lo > 0.0f ? REF_POSITIVE : REF_EMPTY; /* no zero in the patch (invariant 1) */
             if (!grow((void **)&P->leaves, &P->lcap, P->nl + 1, sizeof *P->leaves)) {
                 P->nomem = 1;
                 return REF_EMPTY;
@@ -352,7 +357,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
     }
     /* subdivide: each child's list is filtered onto the top of the stack */
     uint32_t kids[8];
-    int any = 0;
+    int any = 0, positive = 0;
     uint32_t hs = size / 2;
     for (int k = 0; k < 8; ++k) {
         uint32_t cx = x + (k & 1 ? hs : 0), cy = y + (k & 2 ? hs : 0), cz = z + (k & 4 ? hs : 0);
@@ -373,9 +378,14 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
         P->sn = top;
         if (P->nomem)
             return REF_EMPTY;
-        any |= kids[k] != REF_EMPTY;
+        any |= kids[k] != REF_EMPTY && kids[k] != REF_POSITIVE;
+        positive |= kids[k] == REF_POSITIVE;
     }
-    return any ? push_node(&P->nodes, &P->nn, &P->ncap, kids, &P->nomem) : REF_EMPTY;
+    /* A cell of positive and empty children only is outside as a whole
+     * (the empty ones meet no splat's disk). */
+    if (!any)
+        return positive ? REF_POSITIVE : REF_EMPTY;
+    return push_node(&P->nodes, &P->nn, &P->ncap, kids, &P->nomem);
 }
 
 static void part_free(part *P)
@@ -545,6 +555,10 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
             gref ch = resolve(T, g.part, tn->child[k]);
             if (ch.ref == REF_EMPTY)
                 continue;
+            if (ch.ref == REF_POSITIVE) {
+                out->pos_mask |= (uint8_t)(1u << k);
+                continue;
+            }
             out->child_mask |= (uint8_t)(1u << k);
             if (ch.ref & REF_LEAF) {
                 const part *P = &T->parts[ch.part];
@@ -561,7 +575,7 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
                 queue[qn++] = ch;
             }
         }
-        assert(out->child_mask != 0); /* invariant 3 */
+        assert((out->child_mask | out->pos_mask) != 0); /* invariant 3 */
     }
     iso->node_count = qn;
     iso->leaf_count = ln;

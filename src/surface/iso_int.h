@@ -31,7 +31,12 @@ typedef struct iso_node {
     uint32_t leaf_base;  /* first leaf child in leaves[]                  */
     uint8_t child_mask;  /* children that exist                           */
     uint8_t leaf_mask;   /* of those, the leaves                          */
-    uint8_t pad[2];      /* zero (the checksum reads it)                  */
+    uint8_t pos_mask;    /* children not stored whose corners are all valid
+                            and positive: in front of the surface. A ray
+                            accepting either face that crosses one is
+                            outside, so an exit crossing after it is not
+                            taken as a back face (iso.c)                  */
+    uint8_t pad;         /* zero (the checksum reads it)                  */
 } iso_node;
 
 typedef struct iso_leaf {

@@ -39,26 +39,24 @@ sg_status sg_iso_sites_create(const sg_iso *iso, const sg_pointset *points, sg_i
     for (size_t c = 0; c < n; ++c) {
         sg_vec3 nrm = sg_iso_decode_normal(iso->cn[c]);
         a[3][c] = nrm.x, a[4][c] = nrm.y, a[5][c] = nrm.z;
-        radius[c] = INFINITY; /* no leaf yet (invariant 1 fills it) */
+        radius[c] = 0.0f; /* no leaf yet (invariant 1 fills it) */
     }
     sg_iso_leaf_boxes(iso, box);
     for (size_t l = 0; l < leaves; ++l) {
         const iso_leaf *L = &iso->leaves[l];
-        float edge = box[l].hi.x - box[l].lo.x;
         uint32_t sp = L->splat;
         assert(sp < points->count);
         for (int c = 0; c < 8; ++c) {
             uint32_t id = L->corner[c];
             assert(id < n);
-            if (radius[id] == INFINITY) { /* first leaf to use it: position and colour */
+            if (radius[id] == 0.0f) { /* first leaf to use it: position, reach and colour */
                 px[id] = c & 1 ? box[l].hi.x : box[l].lo.x;
                 py[id] = c & 2 ? box[l].hi.y : box[l].lo.y;
                 pz[id] = c & 4 ? box[l].hi.z : box[l].lo.z;
                 ar[id] = points->ar[sp], ag[id] = points->ag[sp], ab[id] = points->ab[sp];
                 splat[id] = sp;
+                radius[id] = points->radius[sp];
             }
-            if (edge < radius[id])
-                radius[id] = edge;
         }
     }
     sg_free(box);
