@@ -34,6 +34,10 @@
 #include <math.h>
 #include <string.h>
 
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
 #include "core/alloc.h"
 #include "surface/iso_int.h"
 
@@ -371,6 +375,52 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
     return 0;
 }
 
+/* Bit j of the result is bit j ^ octant of mask (octant < 8): the three
+ * index bits flipped by swapping bits, pairs and nibbles. */
+static inline unsigned xor_permute(unsigned mask, unsigned octant)
+{
+    if (octant & 1u)
+        mask = (mask & 0x55u) << 1 | (mask & 0xAAu) >> 1;
+    if (octant & 2u)
+        mask = (mask & 0x33u) << 2 | (mask & 0xCCu) >> 2;
+    if (octant & 4u)
+        mask = (mask & 0x0Fu) << 4 | (mask & 0xF0u) >> 4;
+    return mask;
+}
+
+/* The ray's interval [c0[k], c1[k]] in each of a cell's 8 children (child
+ * k: the low or high half per axis, bit a of k) from the halves' per-axis
+ * intervals, clipped to the cell's [t0, t1]; returns the mask of children
+ * with c0 <= c1. The AVX path computes the same maxima and minima as the
+ * scalar one (max and min are exact), all 8 at once, without branches. */
+static inline unsigned children_crossed(const float ilo[3][2], const float ihi[3][2], float t0, float t1,
+                                        float c0[8], float c1[8])
+{
+#ifdef __AVX2__
+    /* lanes k: x half k & 1, y half (k >> 1) & 1, z half k >> 2 */
+    __m256 lx = _mm256_blend_ps(_mm256_set1_ps(ilo[0][0]), _mm256_set1_ps(ilo[0][1]), 0xAA);
+    __m256 ly = _mm256_blend_ps(_mm256_set1_ps(ilo[1][0]), _mm256_set1_ps(ilo[1][1]), 0xCC);
+    __m256 lz = _mm256_blend_ps(_mm256_set1_ps(ilo[2][0]), _mm256_set1_ps(ilo[2][1]), 0xF0);
+    __m256 hx = _mm256_blend_ps(_mm256_set1_ps(ihi[0][0]), _mm256_set1_ps(ihi[0][1]), 0xAA);
+    __m256 hy = _mm256_blend_ps(_mm256_set1_ps(ihi[1][0]), _mm256_set1_ps(ihi[1][1]), 0xCC);
+    __m256 hz = _mm256_blend_ps(_mm256_set1_ps(ihi[2][0]), _mm256_set1_ps(ihi[2][1]), 0xF0);
+    __m256 a = _mm256_max_ps(_mm256_max_ps(_mm256_set1_ps(t0), lx), _mm256_max_ps(ly, lz));
+    __m256 b = _mm256_min_ps(_mm256_min_ps(_mm256_set1_ps(t1), hx), _mm256_min_ps(hy, hz));
+    _mm256_storeu_ps(c0, a);
+    _mm256_storeu_ps(c1, b);
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ));
+#else
+    unsigned mask = 0;
+    for (int k = 0; k < 8; ++k) {
+        int bx = k & 1, by = (k >> 1) & 1, bz = k >> 2;
+        c0[k] = max2(max2(t0, ilo[0][bx]), max2(ilo[1][by], ilo[2][bz]));
+        c1[k] = min2(min2(t1, ihi[0][bx]), min2(ihi[1][by], ihi[2][bz]));
+        mask |= (unsigned)(c0[k] <= c1[k]) << k;
+    }
+    return mask;
+#endif
+}
+
 typedef struct stack_entry {
     uint32_t index;  /* node or leaf                                   */
     uint32_t x, y, z;
@@ -463,15 +513,13 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
         unsigned inner_mask = N->child_mask & ~N->leaf_mask;
         /* positive cells matter only to rays accepting either face */
         unsigned visit = N->child_mask | (rs.either ? N->pos_mask : 0u);
-        for (int j = 7; j >= 0; --j) {
-            unsigned k = (unsigned)j ^ octant;
-            if (!(visit >> k & 1u))
-                continue;
+        float c0s[8], c1s[8];
+        visit &= children_crossed(ilo, ihi, e.t0, e.t1, c0s, c1s);
+        /* front to back is j = 0..7 with k = j ^ octant: push j = 7 first */
+        for (unsigned m = xor_permute(visit, octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
+            unsigned j = 31u - (unsigned)__builtin_clz(m), k = j ^ octant;
             int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-            float c0 = max2(max2(e.t0, ilo[0][bx]), max2(ilo[1][by], ilo[2][bz]));
-            float c1 = min2(min2(e.t1, ihi[0][bx]), min2(ihi[1][by], ihi[2][bz]));
-            if (!(c0 <= c1))
-                continue;
+            float c0 = c0s[k], c1 = c1s[k];
             unsigned below = (1u << k) - 1u;
             stack_entry ce = {0, base[0] + (bx ? hs : 0), base[1] + (by ? hs : 0), base[2] + (bz ? hs : 0), c0, c1,
                               (uint8_t)(e.level + 1), 0};

@@ -11,7 +11,7 @@
  * Parallelism: the first TOP_LEVELS levels are split serially; each kept
  * cell at that level is a task that builds its subtree ("part") into its
  * own arrays (OpenMP dynamic schedule). The parts are then laid out
- * serially in breadth-first order from the root: inner children of a node
+ * serially depth first from the root (Morton order): inner children of a node
  * contiguous, leaf children contiguous, corners numbered in order of first
  * use. Nothing in the result depends on which thread built what.
  *
@@ -520,6 +520,7 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
         return sg_error_set(err, SG_ERR_NOMEM, "iso: %zu leaves and %zu nodes exceed 32-bit indices", leaves, inner);
     sg_status st = SG_OK;
     gref *queue = sg_alloc_array(inner ? inner : 1, sizeof *queue);
+    uint32_t *todo = sg_alloc_array(inner ? inner : 1, sizeof *todo); /* depth-first: nodes to lay out */
     iso->nodes = sg_calloc_array(inner ? inner : 1, sizeof *iso->nodes);
     iso->leaves = sg_alloc_array(leaves ? leaves : 1, sizeof *iso->leaves);
     corners C = {0};
@@ -536,16 +537,24 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
     C.hash = sg_calloc_array(hcap, sizeof *C.hash);
     C.cap = ccap;
     C.hcap = hcap;
-    if (!queue || !iso->nodes || !iso->leaves || !C.key || !C.f || !C.n || !C.hash) {
+    if (!queue || !todo || !iso->nodes || !iso->leaves || !C.key || !C.f || !C.n || !C.hash) {
         st = sg_error_set(err, SG_ERR_NOMEM, "iso: out of memory laying out %zu leaves", leaves);
         goto done;
     }
-    size_t qn = 0, ln = 0;
+    /* Depth first: a node's inner children get consecutive indices when
+     * the node is laid out (queue[] holds each index's tree node) and are
+     * laid out before its siblings' subtrees, so the leaves, and the
+     * corners numbered by first use, follow the octree's Morton order:
+     * neighbouring cells lie near each other in memory (measured:
+     * breadth-first order cost a cache miss per leaf and corner). */
+    size_t qn = 0, ln = 0, tn_todo = 0;
     if (root != REF_EMPTY) {
         assert(!(root & REF_LEAF)); /* the top levels always split */
         queue[qn++] = (gref){(uint32_t)T->np, root};
+        todo[tn_todo++] = 0;
     }
-    for (size_t q = 0; q < qn; ++q) {
+    while (tn_todo > 0) {
+        size_t q = todo[--tn_todo];
         gref g = queue[q];
         const tnode *tn = g.part == T->np ? &T->nodes[g.ref] : &T->parts[g.part].nodes[g.ref];
         iso_node *out = &iso->nodes[q];
@@ -576,6 +585,8 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
             }
         }
         assert((out->child_mask | out->pos_mask) != 0); /* invariant 3 */
+        for (size_t c = qn; c-- > out->inner_base;) /* first child on top */
+            todo[tn_todo++] = (uint32_t)c;
     }
     iso->node_count = qn;
     iso->leaf_count = ln;
@@ -599,6 +610,7 @@ static sg_status lay_out(sg_iso *iso, const top *T, uint32_t root, sg_error *err
     }
 done:
     sg_free(queue);
+    sg_free(todo);
     sg_free(C.key);
     sg_free(C.f);
     sg_free(C.n);
