@@ -55,7 +55,8 @@ static const char usage[] =
     "  --radius-k K        splat radius from the K-th nearest neighbour (default 8)\n"
     "  --radius-scale S    radius multiplier (default 1)\n"
     "Surface\n"
-    "  --surface mls|disk  implicit MLS surface (default) or blended disks\n"
+    "  --surface mls|disk|iso  implicit MLS surface (default), blended disks, or the\n"
+    "                    MLS surface sampled into an implicit surface octree\n"
     "  --kernel hat|gaussian   MLS weight (default hat)\n"
     "  --samples K         MLS samples per leaf interval (default 8)\n"
     "  --no-shrink --no-encourage --no-collapse   turn off a kd-tree refinement\n"
@@ -194,7 +195,8 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--surface")) {
             if (!strcmp(v, "mls")) o->scene.model = SG_SURFACE_MLS;
             else if (!strcmp(v, "disk")) o->scene.model = SG_SURFACE_DISK;
-            else return fail("--surface: '%s' is not mls or disk", v);
+            else if (!strcmp(v, "iso")) o->scene.model = SG_SURFACE_ISO;
+            else return fail("--surface: '%s' is not mls, disk or iso", v);
         } else if (!strcmp(a, "--kernel")) {
             if (!strcmp(v, "hat")) o->scene.kernel = SG_KERNEL_HAT;
             else if (!strcmp(v, "gaussian")) o->scene.kernel = SG_KERNEL_GAUSSIAN;
@@ -342,7 +344,8 @@ static void print_stats(const options *o, const sg_scene_info *info, const sg_re
 {
     const sg_ray_stats *p = &st->primary;
     double r = p->rays ? (double)p->rays : 1.0;
-    printf("\n%-28s %s\n", "surface", o->scene.model == SG_SURFACE_DISK ? "disk" : "mls");
+    printf("\n%-28s %s\n", "surface",
+           o->scene.model == SG_SURFACE_DISK ? "disk" : o->scene.model == SG_SURFACE_ISO ? "iso" : "mls");
     printf("%-28s %zu\n", "splats", splats);
     printf("%-28s %.3f s\n", "build time", info->build_seconds);
     printf("%-28s %.1f MiB\n", "scene memory", (double)info->memory_bytes / (1024.0 * 1024.0));
