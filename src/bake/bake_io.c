@@ -353,7 +353,7 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
     for (size_t m = 0; m < models; ++m) {
         size_t n = sg_scene_sites(sg_world_scene(w, (uint32_t)m))->count;
         if (counts[m] != n) {
-            st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: model %zu has %" PRIu64 " splats in the bake, %zu in the scene",
+            st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: model %zu has %" PRIu64 " light sites in the bake, %zu in the scene",
                               path, m, counts[m], n);
             goto done;
         }

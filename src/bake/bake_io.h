@@ -99,7 +99,7 @@
  *    the world lacks;
  *  SG_ERR_INVALID_ARG  another scene (bake_file.h's message); a model or
  *    splat count that differs from the world ("x.sgbake: model 1 has 30000
- *    splats in the bake, 31000 in the scene"); a checkpoint given as a bake
+ *    light sites in the bake, 31000 in the scene"); a checkpoint given as a bake
  *    or the other way round; a checkpoint made with other parameters
  *    (both sets printed);
  *  SG_ERR_NOMEM.

@@ -273,7 +273,7 @@ static void test_bake_io_splat_count_mismatch(void **state)
     const char *path = tmp_path("count.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     char msg[256];
-    snprintf(msg, sizeof msg, "%s: model 0 has %zu splats in the bake, %zu in the scene", path, have, want);
+    snprintf(msg, sizeof msg, "%s: model 0 has %zu light sites in the bake, %zu in the scene", path, have, want);
     expect_load_fails(path, w2, SCENE_HASH, SG_ERR_INVALID_ARG, msg);
     sg_world *one = sg_test_world_from_json("{\"models\":[{\"builtin\":\"ground\",\"points\":3000}]}");
     snprintf(msg, sizeof msg, "%s: 2 models in the bake, 1 in the scene", path);
