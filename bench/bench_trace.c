@@ -7,6 +7,7 @@
  *   mls  refinements on   (kd_disable = 0)                Wald & Seidel 2005
  *   mls  refinements off  (SG_KD_NO_REFINEMENTS)          ditto, §3.4 off
  *   disk                  (refinements do not apply)      Kashyap 2010 ch. 3
+ *   iso                   (the MLS surface in an octree)  Kashyap 2010 ch. 4
  * and renders 512x512 frames with sg_render_frame, SG_SHADE_SIMPLE (one
  * primary ray per pixel, no shadow rays): one warm-up frame, then the best
  * of N. Beside each row it renders the same pixels through Embree's
@@ -42,7 +43,7 @@
 #define IMAGE_SIZE 512     /* pixels per side of every frame (the size) */
 #define FOV_DEG 40.0f      /* vertical field of view of both views               */
 #define MAX_SIZES 16
-#define MAX_ROWS (MAX_SIZES * 2 * 3)
+#define MAX_ROWS (MAX_SIZES * 2 * 4) /* sizes x views x configs */
 
 /* Whole view: the camera sits front-left-above (-x, +y, +z of the centre),
  * looking down at the model; image right is about +x, so the dragon's head
@@ -85,10 +86,11 @@ typedef struct config {
     uint32_t kd_disable;
 } config;
 
-static const config configs[3] = {
+static const config configs[4] = {
     {"mls", "on", SG_SURFACE_MLS, 0},
     {"mls", "off", SG_SURFACE_MLS, SG_KD_NO_REFINEMENTS},
     {"disk", "n/a", SG_SURFACE_DISK, 0},
+    {"iso", "n/a", SG_SURFACE_ISO, 0},
 };
 
 typedef struct options {
@@ -466,7 +468,7 @@ int main(int argc, char **argv)
                "%.1f MiB\n",
                ps.count, load_s, embree_discs_build_seconds(e),
                (double)embree_discs_memory_bytes(e) / 1048576.0);
-        for (int ci = 0; ci < 3 && status == 0; ci++) {
+        for (int ci = 0; ci < (int)(sizeof configs / sizeof configs[0]) && status == 0; ci++) {
             const config *c = &configs[ci];
             sg_scene_desc sd = {.model = c->model, .kd_disable = c->kd_disable,
                                 .threads = o.threads};

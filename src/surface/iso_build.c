@@ -627,7 +627,7 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     sg_iso_desc d = desc ? *desc : (sg_iso_desc){0};
     if (d.max_depth == 0) d.max_depth = 16;
     if (d.tolerance == 0.0f) d.tolerance = 0.05f;
-    if (d.leaf_radii == 0.0f) d.leaf_radii = 1.0f;
+    if (d.leaf_radii == 0.0f) d.leaf_radii = 2.0f; /* iso.h */
     if (d.max_depth < 2 || d.max_depth > ISO_MAX_DEPTH)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: max_depth %d outside 2..%d", d.max_depth,
                             ISO_MAX_DEPTH);
