@@ -17,9 +17,13 @@
  * Surfaces: --surfaces (default mls,iso) lists the surface models to
  * compare (surface/scene.h: "mls", "disk", "iso"); each is set on both
  * models, the dragon's and the ground's ("surface": {"model": ...}), and
- * each gets its own world build, bake and walk of the same path, in the
- * same process, one after the other, so the frame-time ratios between
- * them (ISO/MLS in the targets) share the machine's load of the moment.
+ * each gets its own world build and bake (one after the other); then all
+ * of them walk the path together, key by key in turn (walk_all), so a
+ * change in the machine's load meets every surface alike and the
+ * frame-time ratios between them (ISO/MLS in the targets) hold on a
+ * shared machine. (Walking one surface after the other, a 1M run saw the
+ * load fall from 7 to 2 between the two walks: ISO/MLS 0.36 in wall time,
+ * 1.15 in CPU time.)
  * After each 512x512 walk the still frames of two keys (the first and
  * the middle of the close pass) are written as PNG to
  * out/bench_view/frame_N_MATERIAL_SURFACE_KEY.png, and the share of their
@@ -109,7 +113,8 @@ static const char usage[] =
     "  --mesh PATH       mesh to sample (default " DEFAULT_MESH ")\n"
     "  --envmap PATH     lat-long EXR (default courtyard.exr; builtin sky if absent)\n"
     "  --sizes A,B,...   point counts (default 32000,125000,1000000,4000000)\n"
-    "  --quick           32000 points, every 6th key (< 1 min)\n"
+    "  --quick           32000 points, every 6th key (about 1 min\n"
+    "                    on quiet cores with the two default surfaces)\n"
     "  --photons N       bake photons (default 500000)\n"
     "  --direct N        bake direct_samples (default 8)\n"
     "  --big-size N      sizes >= N walk every --big-stride-th key (default 1000000)\n"
@@ -434,71 +439,112 @@ static void summarise(double *t, size_t m, double *mean_ms, double *p95_ms)
     *p95_ms = 1e3 * t[rank > 0 ? rank - 1 : 0];
 }
 
-/* Each key: the still frame (scale 1, timed with its CPU time and parts),
- * then the frame the viewer shows while moving: the scale chosen by
- * sg_view_move_scale from the moving frame before (the first from the
- * warm-up frame), the image upscaled to the window. */
-static sg_status walk(const sg_bake *b, const sg_world *w, const sg_display *d, const sg_campath *p, int stride,
-                      int threads, row *r, sg_error *err)
+/* One surface's walk along the path at one frame size. Each key: the still
+ * frame (scale 1, timed with its CPU time and parts), then the frame the
+ * viewer shows while moving: the scale chosen by sg_view_move_scale from
+ * the moving frame before (the first from the warm-up frame), the image
+ * upscaled to the window. The surfaces' walks are interleaved key by key
+ * (walk_all), so a change in the machine's load meets them alike. */
+typedef struct walker {
+    const sg_bake *b;
+    const sg_world *w;
+    row *r;                    /* filled by walker_end                      */
+    sg_view_frame f;
+    double *t, *tm;            /* still and moving frame seconds, per key   */
+    double render, display, cpu, scales; /* sums over the keys walked       */
+    size_t m;                  /* keys walked                               */
+    int move;                  /* the viewer's moving scale, chained        */
+    double move_s;             /* seconds of the moving frame before        */
+    size_t move_px;            /* its primary rays                          */
+} walker;
+
+/* Allocates for n keys and renders the untimed warm-up frame (key 0). */
+static sg_status walker_begin(walker *k, const sg_display *d, const sg_campath *p, size_t n, int threads,
+                              sg_error *err)
 {
-    sg_view_frame f = {0};
-    size_t n = (p->count + (size_t)stride - 1) / (size_t)stride;
-    double *t = malloc(n * sizeof *t), *tm = malloc(n * sizeof *tm);
-    if (!t || !tm) {
-        free(t);
-        free(tm);
+    k->t = malloc(n * sizeof *k->t);
+    k->tm = malloc(n * sizeof *k->tm);
+    if (!k->t || !k->tm)
         return sg_error_set(err, SG_ERR_NOMEM, "frame times");
-    }
-    sg_status st = sg_view_frame_resize(&f, r->width, r->height, err);
-    float aspect = (float)r->width / (float)r->height;
+    sg_status st = sg_view_frame_resize(&k->f, k->r->width, k->r->height, err);
     sg_camera cam;
-    /* Warm-up: the first key, untimed. */
     if (st == SG_OK)
-        st = sg_campath_camera(&p->keys[0], aspect, &cam, err);
+        st = sg_campath_camera(&p->keys[0], (float)k->r->width / (float)k->r->height, &cam, err);
     if (st == SG_OK)
-        st = sg_view_frame_render(&f, b, w, &cam, 1, threads, d, err);
-    double render = 0, display = 0, cpu = 0, scales = 0;
-    size_t m = 0;
-    int move = f.scale; /* the viewer's state when the camera starts moving */
-    double move_s = f.render_seconds + f.display_seconds;
-    size_t move_px = f.rays;
-    for (size_t i = 0; i < p->count && st == SG_OK; i += (size_t)stride) {
-        st = sg_campath_camera(&p->keys[i], aspect, &cam, err);
-        if (st != SG_OK)
-            break;
-        double t0 = omp_get_wtime(), c0 = cpu_seconds();
-        st = sg_view_frame_render(&f, b, w, &cam, 1, threads, d, err);
-        t[m] = omp_get_wtime() - t0;
-        cpu += cpu_seconds() - c0;
-        render += f.render_seconds;
-        display += f.display_seconds;
-        if (st != SG_OK)
-            break;
-        move = sg_view_move_scale(move, move_s, move_px, r->width, r->height, SG_VIEW_MOVE_BUDGET_SECONDS);
-        t0 = omp_get_wtime();
-        st = sg_view_frame_render(&f, b, w, &cam, move, threads, d, err);
-        tm[m++] = omp_get_wtime() - t0;
-        move_s = f.render_seconds + f.display_seconds;
-        move_px = f.rays;
-        scales += move;
+        st = sg_view_frame_render(&k->f, k->b, k->w, &cam, 1, threads, d, err);
+    k->move = k->f.scale; /* the viewer's state when the camera starts moving */
+    k->move_s = k->f.render_seconds + k->f.display_seconds;
+    k->move_px = k->f.rays;
+    return st;
+}
+
+static sg_status walker_key(walker *k, const sg_display *d, const sg_campath_key *key, int threads, sg_error *err)
+{
+    const row *r = k->r;
+    sg_camera cam;
+    sg_status st = sg_campath_camera(key, (float)r->width / (float)r->height, &cam, err);
+    if (st != SG_OK)
+        return st;
+    double t0 = omp_get_wtime(), c0 = cpu_seconds();
+    st = sg_view_frame_render(&k->f, k->b, k->w, &cam, 1, threads, d, err);
+    k->t[k->m] = omp_get_wtime() - t0;
+    k->cpu += cpu_seconds() - c0;
+    k->render += k->f.render_seconds;
+    k->display += k->f.display_seconds;
+    if (st != SG_OK)
+        return st;
+    k->move = sg_view_move_scale(k->move, k->move_s, k->move_px, r->width, r->height, SG_VIEW_MOVE_BUDGET_SECONDS);
+    t0 = omp_get_wtime();
+    st = sg_view_frame_render(&k->f, k->b, k->w, &cam, k->move, threads, d, err);
+    k->tm[k->m++] = omp_get_wtime() - t0;
+    k->move_s = k->f.render_seconds + k->f.display_seconds;
+    k->move_px = k->f.rays;
+    k->scales += k->move;
+    return st;
+}
+
+static void walker_end(walker *k, int stride)
+{
+    row *r = k->r;
+    size_t m = k->m;
+    summarise(k->tm, m, &r->move_mean_ms, &r->move_p95_ms);
+    r->move_fps = 1e3 / r->move_mean_ms;
+    r->move_scale = k->scales / (double)m;
+    summarise(k->t, m, &r->mean_ms, &r->p95_ms);
+    r->frames = (int)m;
+    r->stride = stride;
+    r->min_ms = 1e3 * k->t[0];
+    r->max_ms = 1e3 * k->t[m - 1];
+    r->render_ms = 1e3 * k->render / (double)m;
+    r->display_ms = 1e3 * k->display / (double)m;
+    r->fps = 1e3 / r->mean_ms;
+    r->cpu_ms = 1e3 * k->cpu / (double)m;
+}
+
+static void walker_free(walker *k)
+{
+    free(k->t);
+    free(k->tm);
+    sg_view_frame_free(&k->f);
+}
+
+/* Walks every --surfaces world along the path at one frame size, key by
+ * key in turn: k[0..count) come with b, w and r set (r's width, height). */
+static sg_status walk_all(walker *k, int count, const sg_display *d, const sg_campath *p, int stride, int threads,
+                          sg_error *err)
+{
+    size_t n = (p->count + (size_t)stride - 1) / (size_t)stride;
+    sg_status st = SG_OK;
+    for (int s = 0; s < count && st == SG_OK; s++)
+        st = walker_begin(&k[s], d, p, n, threads, err);
+    for (size_t i = 0; i < p->count && st == SG_OK; i += (size_t)stride)
+        for (int s = 0; s < count && st == SG_OK; s++)
+            st = walker_key(&k[s], d, &p->keys[i], threads, err);
+    for (int s = 0; s < count; s++) {
+        if (st == SG_OK)
+            walker_end(&k[s], stride);
+        walker_free(&k[s]);
     }
-    if (st == SG_OK) {
-        summarise(tm, m, &r->move_mean_ms, &r->move_p95_ms);
-        r->move_fps = 1e3 / r->move_mean_ms;
-        r->move_scale = scales / (double)m;
-        summarise(t, m, &r->mean_ms, &r->p95_ms);
-        r->frames = (int)m;
-        r->stride = stride;
-        r->min_ms = 1e3 * t[0];
-        r->max_ms = 1e3 * t[m - 1];
-        r->render_ms = 1e3 * render / (double)m;
-        r->display_ms = 1e3 * display / (double)m;
-        r->fps = 1e3 / r->mean_ms;
-        r->cpu_ms = 1e3 * cpu / (double)m;
-    }
-    free(t);
-    free(tm);
-    sg_view_frame_free(&f);
     return st;
 }
 
@@ -585,6 +631,11 @@ static int write_targets(FILE *f, const report *rp)
     const options *o = rp->o;
     static const double target_fps[N_RES] = {30.0, 15.0};
     int found = 0;
+    for (int s = 0; s < o->surface_count; s++)
+        for (int ri = 0; ri < N_RES; ri++)
+            found += find_row(rp, 1000000, 0, o->surfaces[s], res_w[ri]) != NULL;
+    if (found == 0)
+        return 0;
     fputs("| surface | size | target | mean ms | p95 ms | mean fps | met | CPU ms | fps on idle cores | "
           "moving fps (scale) | world build s | bake s |\n"
           "|---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n",
@@ -594,7 +645,6 @@ static int write_targets(FILE *f, const report *rp)
             const row *r = find_row(rp, 1000000, 0, o->surfaces[s], res_w[ri]);
             if (!r)
                 continue;
-            found++;
             fprintf(f, "| %s | %dx%d | >= %g fps | %.1f | %.1f | %.1f | %s | %.1f | %.1f | %.1f (%.2f) | %.1f | "
                        "%.1f |\n",
                     surf_label[r->surf], r->width, r->height, target_fps[ri], r->mean_ms, r->p95_ms, r->fps,
@@ -615,10 +665,13 @@ static void write_ratios(FILE *f, const report *rp)
     int base = o->surfaces[0];
     fprintf(f, "\n## Surfaces side by side (ratios against %s, same run)\n\n"
                "Each ratio is the other surface's figure over %s's for the same size, material and frame "
-               "size, measured one after the other in this process (a ratio below 1: the other surface is "
-               "faster). *Pixels off* = share of the pixels of the 512x512 still frame whose 8-bit display "
+               "size, the frames measured key by key in turn in this process (a ratio below 1: the other "
+               "surface is faster). *Pixels off* = share of the pixels of the 512x512 still frame whose 8-bit display "
                "value moves by more than %d in some channel against %s's frame of the same key (keys 0: low "
-               "orbit, 54: close pass; PNGs in `" PATH_DIR "/frame_N_MATERIAL_SURFACE_KEY.png`).\n\n",
+               "orbit, 54: close pass; PNGs in `" PATH_DIR "/frame_N_MATERIAL_SURFACE_KEY.png`). It counts "
+               "both what the surfaces put where (silhouettes, thin parts) and the two bakes' own noise: "
+               "their light sites differ (splat sample points against the octree's corners), so the grain of "
+               "a modest bake differs pixel by pixel even where the surfaces agree.\n\n",
             surf_label[base], surf_label[base], SNAP_OFF, surf_label[base]);
     fputs("| points | material | surface | size | mean ms ratio | p95 ms ratio | CPU ms ratio | world build ratio | "
           "bake ratio | pixels off, key 0 | pixels off, key 54 |\n"
@@ -669,8 +722,10 @@ static void write_md(FILE *f, const void *ctx)
     fprintf(f, "Surfaces (`--surfaces`): %s. Each is set on both models, the dragon's and the ground's "
                "(`\"surface\": {\"model\": ...}`, surface/scene.h: *mls* = the MLS surface on the splats' "
                "kd-tree, *disk* = disk splats, *iso* = the implicit surface octree sampled from the MLS "
-               "surface, whose corners are the bake's light sites), and each has its own world build, bake "
-               "and walk, one after the other in the same process.\n\n",
+               "surface, whose corners are the bake's light sites). Each has its own world build and bake, "
+               "one after the other (so their times meet whatever load the machine had then); then the "
+               "surfaces walk the path together, key by key in turn, so their frame times share the load "
+               "of the moment and their ratios hold on a shared machine.\n\n",
             surfs);
     fprintf(f, "Path: %zu keys (24 orbiting low, 24 orbiting high, 12 on a close pass), written to "
                "`" PATH_DIR "/path.txt` with the scene files `" PATH_DIR "/dragon_N_MATERIAL_SURFACE.json` "
@@ -716,7 +771,7 @@ static void write_md(FILE *f, const void *ctx)
     }
     fputs("\n## Targets (issue: 1M points, diffuse bake)\n\n", f);
     if (write_targets(f, rp) == 0)
-        fputs("\nNot measured (no 1000000-point diffuse run).\n", f);
+        fputs("Not measured (no 1000000-point diffuse run).\n", f);
     else {
         fprintf(f, "\n*fps on idle cores* = 1000 x %d threads / CPU ms; *moving* = `--move-scale auto`; the viewer "
                    "refines to the full frame once the camera has been still for %g s.\n",
@@ -829,11 +884,14 @@ int main(int argc, char **argv)
                 printf("\n%zu points, %s: skipped (--glossy-up-to %zu)\n", n, mat_name[mat], o.glossy_up_to);
                 continue;
             }
+            /* Every surface's world and bake first, then their walks key
+             * by key in turn (walk_all); rows go in surface order. */
+            sg_scene_file sf[N_SURF] = {{0}};
+            sg_world *w[N_SURF] = {NULL};
+            sg_bake *b[N_SURF] = {NULL};
+            row *rs = &rows[nrows];
             for (int s = 0; s < o.surface_count && status == 0; s++) {
                 int surf = o.surfaces[s];
-                sg_scene_file sf = {0};
-                sg_world *w = NULL;
-                sg_bake *b = NULL;
                 char jpath[512];
                 snprintf(jpath, sizeof jpath, PATH_DIR "/dragon_%zu_%s_%s.json", n, mat_name[mat], surf_name[surf]);
                 if (!scene_json(&o, &setup, n, mat, surf, json, sizeof json)) {
@@ -841,66 +899,71 @@ int main(int argc, char **argv)
                     break;
                 }
                 bench_write_file(jpath, write_text, json);
-                if (sg_scene_file_parse(json, strlen(json), jpath, NULL, &sf, &err) != SG_OK) {
+                if (sg_scene_file_parse(json, strlen(json), jpath, NULL, &sf[s], &err) != SG_OK) {
                     status = fail("%s", err.message);
                     break;
                 }
                 double t0 = omp_get_wtime();
-                if (sg_world_create(&sf, &w, &err) != SG_OK) {
-                    sg_scene_file_free(&sf);
-                    status = fail("%zu points: %s", n, err.message);
+                if (sg_world_create(&sf[s], &w[s], &err) != SG_OK) {
+                    status = fail("%zu points, %s: %s", n, surf_name[surf], err.message);
                     break;
                 }
                 double world_s = omp_get_wtime() - t0;
                 size_t splats = 0;
-                for (uint32_t m = 0; m < sg_world_model_count(w); m++) {
+                for (uint32_t m = 0; m < sg_world_model_count(w[s]); m++) {
                     sg_scene_info info;
-                    sg_scene_get_info(sg_world_scene(w, m), &info);
+                    sg_scene_get_info(sg_world_scene(w[s], m), &info);
                     splats += info.splat_count;
                 }
-                printf("\n%zu points, %s, %s: world %.1f s (%zu splats); ", n, mat_name[mat], surf_name[surf], world_s,
-                       splats);
+                printf("%zu points, %s, %s: world %.1f s (%zu splats); ", n, mat_name[mat], surf_name[surf],
+                       world_s, splats);
                 fflush(stdout);
                 sg_bake_desc bd = {.photons = {.count = o.photons, .threads = o.threads}, .direct_samples = o.direct};
                 t0 = omp_get_wtime();
-                if (sg_bake_create(w, &bd, &b, &err) != SG_OK) {
-                    status = fail("%zu points: bake: %s", n, err.message);
-                    goto next;
+                if (sg_bake_create(w[s], &bd, &b[s], &err) != SG_OK) {
+                    status = fail("%zu points, %s: bake: %s", n, surf_name[surf], err.message);
+                    break;
                 }
                 double bake_s = omp_get_wtime() - t0;
                 sg_bake_stats bs;
-                sg_bake_get_stats(b, &bs);
+                sg_bake_get_stats(b[s], &bs);
                 printf("bake %.1f s (trace %.1f, gather + direct %.1f)\n", bake_s, bs.trace_seconds,
                        bake_s - bs.trace_seconds);
-                print_head();
-                for (int ri = 0; ri < N_RES; ri++) {
-                    row *r = &rows[nrows];
-                    memset(r, 0, sizeof *r);
-                    *r = (row){.points = n, .mat = mat, .surf = surf, .splats = splats, .world_s = world_s,
-                               .bake_s = bake_s,
-                               .trace_s = bs.trace_seconds, .gather_s = bake_s - bs.trace_seconds,
-                               .width = res_w[ri], .height = res_h[ri]};
-                    if (walk(b, w, disp, &path, stride, o.threads, r, &err) != SG_OK) {
-                        status = fail("%zu points: frame: %s", n, err.message);
-                        goto next;
-                    }
-                    r->snap_off[0] = r->snap_off[1] = NAN;
-                    if (ri == 0) {
-                        char stem[512];
-                        snprintf(stem, sizeof stem, PATH_DIR "/frame_%zu_%s_%s", n, mat_name[mat], surf_name[surf]);
-                        if (snapshots(b, w, disp, &path, o.threads, stem, s == 0, snap_refs, r, &err) != SG_OK) {
-                            status = fail("%zu points: snapshot: %s", n, err.message);
-                            goto next;
-                        }
-                    }
-                    print_row(r);
-                    fflush(stdout);
-                    nrows++;
+                for (int ri = 0; ri < N_RES; ri++)
+                    rs[s * N_RES + ri] = (row){.points = n, .mat = mat, .surf = surf, .splats = splats,
+                                               .world_s = world_s, .bake_s = bake_s, .trace_s = bs.trace_seconds,
+                                               .gather_s = bake_s - bs.trace_seconds, .width = res_w[ri],
+                                               .height = res_h[ri], .snap_off = {NAN, NAN}};
+            }
+            for (int ri = 0; ri < N_RES && status == 0; ri++) {
+                walker k[N_SURF] = {{0}};
+                for (int s = 0; s < o.surface_count; s++)
+                    k[s] = (walker){.b = b[s], .w = w[s], .r = &rs[s * N_RES + ri]};
+                if (walk_all(k, o.surface_count, disp, &path, stride, o.threads, &err) != SG_OK) {
+                    status = fail("%zu points: frame: %s", n, err.message);
+                    break;
                 }
-            next:
-                sg_bake_destroy(b);
-                sg_world_destroy(w);
-                sg_scene_file_free(&sf);
+                for (int s = 0; s < o.surface_count && status == 0 && ri == 0; s++) {
+                    char stem[512];
+                    snprintf(stem, sizeof stem, PATH_DIR "/frame_%zu_%s_%s", n, mat_name[mat],
+                             surf_name[o.surfaces[s]]);
+                    if (snapshots(b[s], w[s], disp, &path, o.threads, stem, s == 0, snap_refs, &rs[s * N_RES],
+                                  &err) != SG_OK)
+                        status = fail("%zu points: snapshot: %s", n, err.message);
+                }
+            }
+            if (status == 0) {
+                print_head();
+                for (int i = 0; i < o.surface_count * N_RES; i++)
+                    print_row(&rs[i]);
+                printf("\n");
+                fflush(stdout);
+                nrows += o.surface_count * N_RES;
+            }
+            for (int s = 0; s < o.surface_count; s++) {
+                sg_bake_destroy(b[s]);
+                sg_world_destroy(w[s]);
+                sg_scene_file_free(&sf[s]);
             }
         }
     }
