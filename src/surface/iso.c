@@ -431,47 +431,119 @@ typedef struct stack_entry {
 
 enum { CELL_NODE = 0, CELL_LEAF = 1, CELL_POSITIVE = 2 };
 
-/* Front-to-back traversal; the first accepted crossing (see file note). */
-static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
+/* A ray's traversal constants. */
+typedef struct ray_geom {
+    float od[3], inv[3];
+    int par[3];       /* the ray is parallel to axis a's planes */
+    unsigned octant;  /* bit a: the ray runs towards -a          */
+} ray_geom;
+
+/* The ray's constants and its interval in the root cube, clipped to
+ * [tmin, tmax]; 0 when it misses the cube. */
+static int ray_enter(const sg_iso *iso, const sg_ray *ray, ray_geom *g, float *t0, float *t1)
 {
-    ray_state rs = {.ray = ray};
-    rs.want_front = !(ray->flags & SG_RAY_BACK_ONLY);
-    rs.want_back = !(ray->flags & SG_RAY_FRONT_ONLY);
-    rs.either = rs.want_front && rs.want_back;
-    uint64_t nodes = 0, leaves = 0;
-    int found = 0;
-    if (!iso->node_count)
-        goto out;
-    sg_vec3 o = ray->org, d = ray->dir;
-    float od[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z}, lo[3] = {iso->lo.x, iso->lo.y, iso->lo.z};
-    float inv[3];
-    int par[3];            /* the ray is parallel to axis a's planes */
-    unsigned octant = 0;
+    float dd[3] = {ray->dir.x, ray->dir.y, ray->dir.z}, lo[3] = {iso->lo.x, iso->lo.y, iso->lo.z};
+    g->od[0] = ray->org.x, g->od[1] = ray->org.y, g->od[2] = ray->org.z;
+    g->octant = 0;
     for (int a = 0; a < 3; ++a) {
-        par[a] = dd[a] == 0.0f;
-        inv[a] = par[a] ? 0.0f : 1.0f / dd[a];
+        g->par[a] = dd[a] == 0.0f;
+        g->inv[a] = g->par[a] ? 0.0f : 1.0f / dd[a];
         if (dd[a] < 0.0f)
-            octant |= 1u << a;
+            g->octant |= 1u << a;
     }
-    /* root interval */
-    float t0 = ray->tmin, t1 = ray->tmax;
+    float a0 = ray->tmin, a1 = ray->tmax;
     uint32_t full = 1u << iso->max_depth;
     for (int a = 0; a < 3; ++a) {
         float p0 = iso_coord(lo[a], iso->unit, 0), p1 = iso_coord(lo[a], iso->unit, full);
-        if (par[a]) {
-            if (!(od[a] >= p0 && od[a] <= p1))
-                goto out;
+        if (g->par[a]) {
+            if (!(g->od[a] >= p0 && g->od[a] <= p1))
+                return 0;
             continue;
         }
-        float ta = (p0 - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
-        t0 = max2(t0, min2(ta, tb));
-        t1 = min2(t1, max2(ta, tb));
+        float ta = (p0 - g->od[a]) * g->inv[a], tb = (p1 - g->od[a]) * g->inv[a];
+        a0 = max2(a0, min2(ta, tb));
+        a1 = min2(a1, max2(ta, tb));
     }
-    if (!(t0 <= t1))
+    *t0 = a0;
+    *t1 = a1;
+    return a0 <= a1;
+}
+
+/* Per axis, the ray's t interval in the low and the high half of the cell
+ * whose planes are p0 < pm < p1 (p[a][0..2]). */
+static inline void half_intervals(const ray_geom *g, const float p[3][3], float ilo[3][2], float ihi[3][2])
+{
+    for (int a = 0; a < 3; ++a) {
+        float p0 = p[a][0], pm = p[a][1], p1 = p[a][2], o = g->od[a];
+        if (g->par[a]) {
+            ilo[a][0] = o <= pm ? -INFINITY : INFINITY;
+            ihi[a][0] = o <= pm ? INFINITY : -INFINITY;
+            ilo[a][1] = o >= pm ? -INFINITY : INFINITY;
+            ihi[a][1] = o >= pm ? INFINITY : -INFINITY;
+            continue;
+        }
+        float ta = (p0 - o) * g->inv[a], tm = (pm - o) * g->inv[a], tb = (p1 - o) * g->inv[a];
+        ilo[a][0] = min2(ta, tm);
+        ihi[a][0] = max2(ta, tm);
+        ilo[a][1] = min2(tm, tb);
+        ihi[a][1] = max2(tm, tb);
+    }
+}
+
+/* The planes of a cell at base[] of edge size (grid units): p[a] = the low
+ * plane, the middle one and the high one on axis a. */
+static inline void cell_planes(const sg_iso *iso, const uint32_t base[3], uint32_t size, float p[3][3])
+{
+    const float lo[3] = {iso->lo.x, iso->lo.y, iso->lo.z};
+    for (int a = 0; a < 3; ++a) {
+        p[a][0] = iso_coord(lo[a], iso->unit, base[a]);
+        p[a][1] = iso_coord(lo[a], iso->unit, base[a] + (size >> 1));
+        p[a][2] = iso_coord(lo[a], iso->unit, base[a] + size);
+    }
+}
+
+/* The child k entry of node N (cell at base[], edge size) for the stack,
+ * without its interval. */
+static inline stack_entry child_entry(const iso_node *N, const uint32_t base[3], uint32_t size, uint8_t level,
+                                      unsigned k)
+{
+    uint32_t hs = size >> 1;
+    unsigned below = (1u << k) - 1u;
+    stack_entry ce = {0, base[0] + (k & 1 ? hs : 0), base[1] + (k & 2 ? hs : 0), base[2] + (k & 4 ? hs : 0),
+                      0.0f, 0.0f, (uint8_t)(level + 1), CELL_NODE};
+    if (!(N->child_mask >> k & 1u)) {
+        ce.is_leaf = CELL_POSITIVE;
+    } else if (N->leaf_mask >> k & 1u) {
+        ce.index = N->leaf_base + (uint32_t)popcount8(N->leaf_mask & below);
+        ce.is_leaf = CELL_LEAF;
+    } else {
+        ce.index = N->inner_base + (uint32_t)popcount8(N->child_mask & ~N->leaf_mask & below);
+    }
+    return ce;
+}
+
+static void ray_state_init(ray_state *rs, const sg_ray *ray)
+{
+    *rs = (ray_state){.ray = ray};
+    rs->want_front = !(ray->flags & SG_RAY_BACK_ONLY);
+    rs->want_back = !(ray->flags & SG_RAY_FRONT_ONLY);
+    rs->either = rs->want_front && rs->want_back;
+}
+
+/* Front-to-back traversal; the first accepted crossing (see file note). */
+static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
+{
+    ray_state rs;
+    ray_state_init(&rs, ray);
+    uint64_t nodes = 0, leaves = 0;
+    int found = 0;
+    ray_geom g;
+    float t0, t1;
+    if (!iso->node_count || !ray_enter(iso, ray, &g, &t0, &t1))
         goto out;
     stack_entry st[STACK_MAX];
     int sp = 0;
-    st[sp++] = (stack_entry){0, 0, 0, 0, t0, t1, 0, 0};
+    st[sp++] = (stack_entry){0, 0, 0, 0, t0, t1, 0, CELL_NODE};
     while (sp > 0) {
         stack_entry e = st[--sp];
         nodes++;
@@ -490,47 +562,20 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             continue;
         }
         const iso_node *N = &iso->nodes[e.index];
-        uint32_t hs = size >> 1;
         uint32_t base[3] = {e.x, e.y, e.z};
-        /* per axis, the t interval of the low and the high half */
-        float ilo[3][2], ihi[3][2];
-        for (int a = 0; a < 3; ++a) {
-            float p0 = iso_coord(lo[a], iso->unit, base[a]), pm = iso_coord(lo[a], iso->unit, base[a] + hs),
-                  p1 = iso_coord(lo[a], iso->unit, base[a] + size);
-            if (par[a]) {
-                ilo[a][0] = od[a] <= pm ? -INFINITY : INFINITY;
-                ihi[a][0] = od[a] <= pm ? INFINITY : -INFINITY;
-                ilo[a][1] = od[a] >= pm ? -INFINITY : INFINITY;
-                ihi[a][1] = od[a] >= pm ? INFINITY : -INFINITY;
-                continue;
-            }
-            float ta = (p0 - od[a]) * inv[a], tm = (pm - od[a]) * inv[a], tb = (p1 - od[a]) * inv[a];
-            ilo[a][0] = min2(ta, tm);
-            ihi[a][0] = max2(ta, tm);
-            ilo[a][1] = min2(tm, tb);
-            ihi[a][1] = max2(tm, tb);
-        }
-        unsigned inner_mask = N->child_mask & ~N->leaf_mask;
+        float p[3][3], ilo[3][2], ihi[3][2];
+        cell_planes(iso, base, size, p);
+        half_intervals(&g, p, ilo, ihi);
         /* positive cells matter only to rays accepting either face */
         unsigned visit = N->child_mask | (rs.either ? N->pos_mask : 0u);
         float c0s[8], c1s[8];
         visit &= children_crossed(ilo, ihi, e.t0, e.t1, c0s, c1s);
         /* front to back is j = 0..7 with k = j ^ octant: push j = 7 first */
-        for (unsigned m = xor_permute(visit, octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
-            unsigned j = 31u - (unsigned)__builtin_clz(m), k = j ^ octant;
-            int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-            float c0 = c0s[k], c1 = c1s[k];
-            unsigned below = (1u << k) - 1u;
-            stack_entry ce = {0, base[0] + (bx ? hs : 0), base[1] + (by ? hs : 0), base[2] + (bz ? hs : 0), c0, c1,
-                              (uint8_t)(e.level + 1), 0};
-            if (!(N->child_mask >> k & 1u)) {
-                ce.is_leaf = CELL_POSITIVE;
-            } else if (N->leaf_mask >> k & 1u) {
-                ce.index = N->leaf_base + (uint32_t)popcount8(N->leaf_mask & below);
-                ce.is_leaf = CELL_LEAF;
-            } else {
-                ce.index = N->inner_base + (uint32_t)popcount8(inner_mask & below);
-            }
+        for (unsigned m = xor_permute(visit, g.octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
+            unsigned k = (31u - (unsigned)__builtin_clz(m)) ^ g.octant;
+            stack_entry ce = child_entry(N, base, size, e.level, k);
+            ce.t0 = c0s[k];
+            ce.t1 = c1s[k];
             assert(sp < STACK_MAX);
             st[sp++] = ce;
         }
@@ -545,6 +590,139 @@ out:
         stats->isects += rs.isects;
         stats->splats += rs.roots;
         stats->hits += (uint64_t)found;
+    }
+    return found;
+}
+
+/* Four rays with the same direction signs down one traversal: each keeps
+ * its own interval per cell (computed as trace computes it) and its own
+ * state, so it meets the same leaves in the same order with the same
+ * intervals as alone and gets the same hit, bit for bit; a cell is
+ * visited while any ray still looking for a hit crosses it. */
+typedef struct packet_entry {
+    uint32_t index, x, y, z;
+    float t0[4], t1[4];
+    uint8_t level, kind, active; /* kind: CELL_*; active: rays crossing it */
+} packet_entry;
+
+static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
+{
+    ray_state rs[4];
+    ray_geom g[4];
+    float r0[4] = {0}, r1[4] = {0};
+    unsigned active = 0, found = 0;
+    uint64_t nodes[4] = {0}, leaves[4] = {0};
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        ray_state_init(&rs[r], &rays[r]);
+        if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
+            active |= 1u << r;
+    }
+    unsigned octant = active ? g[__builtin_ctz(active)].octant : 0u;
+    packet_entry st[STACK_MAX];
+    int sp = 0;
+    if (active)
+        st[sp++] = (packet_entry){0, 0, 0, 0, {r0[0], r0[1], r0[2], r0[3]}, {r1[0], r1[1], r1[2], r1[3]}, 0,
+                                  CELL_NODE, (uint8_t)active};
+    while (sp > 0) {
+        packet_entry e = st[--sp];
+        unsigned act = e.active & ~found;
+        if (!act)
+            continue;
+        uint32_t size = 1u << (iso->max_depth - e.level);
+        for (unsigned m = act; m; m &= m - 1)
+            nodes[__builtin_ctz(m)]++;
+        if (e.kind == CELL_POSITIVE) {
+            for (unsigned m = act; m; m &= m - 1) {
+                rs[__builtin_ctz(m)].outside = 1;
+                rs[__builtin_ctz(m)].carry = 0;
+            }
+            continue;
+        }
+        if (e.kind == CELL_LEAF) {
+            sg_aabb box = cell_box(iso, e.x, e.y, e.z, size);
+            for (unsigned m = act; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                leaves[r]++;
+                if (leaf_hit(iso, e.index, box, e.t0[r], e.t1[r], &rs[r], &hits[r]))
+                    found |= 1u << r;
+            }
+            continue;
+        }
+        const iso_node *N = &iso->nodes[e.index];
+        uint32_t base[3] = {e.x, e.y, e.z};
+        float p[3][3];
+        cell_planes(iso, base, size, p);
+        float c0s[4][8], c1s[4][8];
+        unsigned visit[4] = {0}, any = 0;
+        for (unsigned m = act; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            float ilo[3][2], ihi[3][2];
+            half_intervals(&g[r], p, ilo, ihi);
+            visit[r] = (N->child_mask | (rs[r].either ? N->pos_mask : 0u)) &
+                       children_crossed(ilo, ihi, e.t0[r], e.t1[r], c0s[r], c1s[r]);
+            any |= visit[r];
+        }
+        for (unsigned m = xor_permute(any, octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
+            unsigned k = (31u - (unsigned)__builtin_clz(m)) ^ octant;
+            stack_entry ce = child_entry(N, base, size, e.level, k);
+            packet_entry pe = {ce.index, ce.x, ce.y, ce.z, {0}, {0}, ce.level, ce.is_leaf, 0};
+            for (unsigned q = act; q; q &= q - 1) {
+                int r = __builtin_ctz(q);
+                if (!(visit[r] >> k & 1u))
+                    continue;
+                /* a positive cell only for the rays that visit those */
+                pe.active |= (uint8_t)(1u << r);
+                pe.t0[r] = c0s[r][k];
+                pe.t1[r] = c1s[r][k];
+            }
+            assert(sp < STACK_MAX);
+            st[sp++] = pe;
+        }
+    }
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        if (!(found >> r & 1u))
+            hits[r].splat = SG_INVALID_ID;
+        if (stats) {
+            stats->rays++;
+            stats->nodes += nodes[r];
+            stats->leaves += leaves[r];
+            stats->isects += rs[r].isects;
+            stats->splats += rs[r].roots;
+            stats->hits += found >> r & 1u;
+        }
+    }
+    return found;
+}
+
+unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
+                           sg_ray_stats *stats)
+{
+    assert(iso && rays && hits);
+    mask &= 15u;
+    /* one traversal for the rays that share the first ray's direction
+     * signs (front-to-back order is the octant's), the others alone */
+    unsigned same = 0, octant = 0;
+    int first = -1;
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        unsigned o = (rays[r].dir.x < 0.0f) | (rays[r].dir.y < 0.0f) << 1 | (rays[r].dir.z < 0.0f) << 2;
+        if (first < 0) {
+            first = r;
+            octant = o;
+        }
+        if (o == octant)
+            same |= 1u << r;
+    }
+    unsigned found = same ? trace4(iso, rays, same, hits, stats) : 0u;
+    for (unsigned m = mask & ~same; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (trace(iso, &rays[r], &hits[r], stats))
+            found |= 1u << r;
     }
     return found;
 }

@@ -158,6 +158,16 @@ void sg_iso_destroy(sg_iso *iso);
  * stats->splats the candidate roots solved for. */
 int sg_iso_intersect(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats);
 
+/* Up to four rays at once (bit r of mask: rays[r]), e.g. a 2 x 2 quad of
+ * camera rays: each gets exactly the hit sg_iso_intersect gives it, bit
+ * for bit (tested). Rays sharing the first one's direction signs go down
+ * one traversal, each with its own intervals; the others are traced
+ * alone. Returns the mask of the rays that hit; a ray of mask that misses
+ * gets splat = SG_INVALID_ID; hits[r] outside mask is left alone. stats
+ * counts per ray. */
+unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
+                           sg_ray_stats *stats);
+
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays). */
 int sg_iso_occluded(const sg_iso *iso, const sg_ray *ray, sg_ray_stats *stats);
 

@@ -908,6 +908,8 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
                              sg_ray_stats *stats)
 {
     mask &= 15u;
+    if (sc->iso)
+        return sg_iso_intersect4(sc->iso, rays, mask, hits, stats);
     unsigned found = 0;
 #ifdef SG_SCENE_TRAVERSE4
     if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
@@ -917,8 +919,7 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     {
         for (unsigned m = mask; m; m &= m - 1) {
             int r = __builtin_ctz(m);
-            if (sc->iso ? sg_iso_intersect(sc->iso, &rays[r], &hits[r], stats)
-                        : nearest(sc, &rays[r], &hits[r], stats))
+            if (nearest(sc, &rays[r], &hits[r], stats))
                 found |= 1u << r;
         }
     }

@@ -511,6 +511,65 @@ static void test_iso_face_flags(void **state)
     sg_pointset_free(&ps);
 }
 
+/* Four rays at once get the hits each gets alone, bit for bit: 2 x 2
+ * camera quads from outside and from inside the sphere (either face,
+ * front only, back only), quads that straddle the silhouette, a quad with
+ * one ray of other direction signs, and masks with rays left out (their
+ * hits must be left alone). */
+static void test_iso_intersect4_matches_single(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    sg_iso *iso = build_iso(&ps, 0);
+    const sg_vec3 eyes[3] = {sg_v3(1.5f, 1.0f, 3.0f), sg_v3(0.1f, -0.2f, 0.05f), sg_v3(-2.5f, 0.3f, -1.0f)};
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const int n = 64;
+    int checked = 0, hits = 0;
+    for (int ei = 0; ei < 3; ++ei)
+        for (int fi = 0; fi < 3; ++fi)
+            for (int y = 0; y < n; y += 2)
+                for (int x = 0; x < n; x += 2) {
+                    sg_ray rays[4];
+                    for (int r = 0; r < 4; ++r) {
+                        rays[r] = camera_ray(eyes[ei], sg_v3(0, 0, 0), n, x + (r & 1), y + (r >> 1));
+                        rays[r].flags = flags[fi];
+                    }
+                    if (((x + y) / 2) % 7 == 0) /* one ray of other direction signs */
+                        rays[3].dir = sg_v3_scale(rays[3].dir, -1.0f);
+                    unsigned mask = ((x / 2 + y) % 5 == 0) ? 0xBu : 0xFu;
+                    sg_hit four[4], one;
+                    memset(four, 0x5A, sizeof four);
+                    unsigned got = sg_iso_intersect4(iso, rays, mask, four, NULL);
+                    for (int r = 0; r < 4; ++r) {
+                        if (!(mask >> r & 1u)) {
+                            sg_hit untouched;
+                            memset(&untouched, 0x5A, sizeof untouched);
+                            if (memcmp(&four[r], &untouched, sizeof untouched) != 0)
+                                fail_msg("ray %d outside the mask was written", r);
+                            continue;
+                        }
+                        int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
+                        ++checked;
+                        hits += h;
+                        if (h != (int)(got >> r & 1u))
+                            fail_msg("eye %d flags %u pixel (%d, %d) ray %d: alone %d, in four %u", ei, flags[fi],
+                                     x, y, r, h, got >> r & 1u);
+                        if (h && (memcmp(&one.t, &four[r].t, sizeof one.t) || memcmp(&one.p, &four[r].p, sizeof one.p) ||
+                                  memcmp(&one.n, &four[r].n, sizeof one.n) || one.splat != four[r].splat ||
+                                  one.leaf != four[r].leaf))
+                            fail_msg("eye %d flags %u pixel (%d, %d) ray %d: hits differ (t %.9g vs %.9g)", ei,
+                                     flags[fi], x, y, r, (double)one.t, (double)four[r].t);
+                        if (!h && four[r].splat != SG_INVALID_ID)
+                            fail_msg("a miss in four does not say so");
+                    }
+                }
+    printf("intersect4: %d rays checked, %d hits\n", checked, hits);
+    assert_true(hits > checked / 4);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
 /* 9. One thread and two build the same bytes (the parts are laid out in
  * a fixed order; a grid point's f is the same sum whichever cell asks). */
 static void test_iso_threads_identical(void **state)
@@ -590,6 +649,7 @@ int main(void)
         cmocka_unit_test(test_iso_agrees_with_mls_sphere),
         cmocka_unit_test(test_iso_agrees_with_mls_bumpy),
         cmocka_unit_test(test_iso_agrees_with_mls_bunny),
+        cmocka_unit_test(test_iso_intersect4_matches_single),
         cmocka_unit_test(test_iso_sphere_no_holes),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
         cmocka_unit_test(test_iso_holes_stay_open),
