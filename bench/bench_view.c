@@ -696,6 +696,14 @@ static void write_ratios(FILE *f, const report *rp)
     }
 }
 
+/* A path as the docs show it: from "../shared/" on when it reaches the
+ * shared data through the checkout's parent (no machine's folder names). */
+static const char *shown_path(const char *path)
+{
+    const char *shared = strstr(path, "../shared/");
+    return shared ? shared : path;
+}
+
 static void write_md(FILE *f, const void *ctx)
 {
     const report *rp = ctx;
@@ -713,11 +721,12 @@ static void write_md(FILE *f, const void *ctx)
                "Made by `scripts/bench-view.sh` (bench/bench_view.c), which ran `bench_view%s`.\n\n",
             rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0], rp->nproc, rp->args);
     fprintf(f, "Scene: the Stanford dragon sampled to N points, %g units long, standing on the builtin ground, "
-               "under `%s`. Bakes: %zu photons, direct_samples %d; *diffuse* = Lambert albedo %g, *glossy* = GGX "
+               "under `%s`. Bakes: the default transport estimator, %d envmap rays per sample site and the "
+               "default cosine rays; *diffuse* = Lambert albedo %g, *glossy* = GGX "
                "albedo %g, roughness %g, specular %g. A glossy lookup also reads the directional bins "
                "of the sample points under the hit (bake/glossy.h), so its frames cost more than the diffuse "
                "ones.\n\n",
-            (double)SCENE_LENGTH, rp->env_used, o->photons, o->direct, (double)DRAGON_ALBEDO,
+            (double)SCENE_LENGTH, shown_path(rp->env_used), o->direct, (double)DRAGON_ALBEDO,
             (double)DRAGON_ALBEDO, (double)GGX_ROUGHNESS, (double)GGX_SPECULAR);
     fprintf(f, "Surfaces (`--surfaces`): %s. Each is set on both models, the dragon's and the ground's "
                "(`\"surface\": {\"model\": ...}`, surface/scene.h: *mls* = the MLS surface on the splats' "
