@@ -9,6 +9,10 @@
  *   SG_SURFACE_DISK  flat disk splats; the hits within a small depth window
  *                    around the nearest one are blended (Kashyap 2010, §3.5
  *                    "deep blending") for position and normal.
+ *   SG_SURFACE_ISO   the MLS surface sampled into an implicit surface
+ *                    octree (Kashyap 2010 ch. 4, iso.h): no kd-tree, one
+ *                    trilinear patch per leaf; its light sites are the
+ *                    octree's corners (iso_sites.h), not the splats.
  * No leaks (issue 12): a hit's normal faces the ray the way its crossing
  * says (entry: dot(dir, n) < 0, exit: > 0); near folds and thin walls the
  * MLS field is taken per group of splats facing the ray the same way, so
@@ -114,7 +118,9 @@ int sg_scene_intersect(const sg_scene *scene, const sg_ray *ray, sg_hit *hit,
  * sg_scene_intersect would give it, bit for bit (tested). Rays with the
  * same origin and the same direction signs share one kd-tree traversal
  * (MLS surface; each ray still decides at each node as it would alone);
- * others, and disk surfaces, are traced one by one. Returns the mask of
+ * on the ISO rays with the same direction signs share one octree
+ * traversal (sg_iso_intersect4); others, and disk surfaces, are traced one
+ * by one. Returns the mask of
  * the rays that hit; a ray of mask that misses gets splat = SG_INVALID_ID;
  * hits[r] of rays outside mask is left alone. stats counts per ray. */
 unsigned sg_scene_intersect4(const sg_scene *scene, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
