@@ -1,7 +1,8 @@
 /* scene.h — a ray-traceable surface over a point set.
  *
- * What it does: builds a SAH kd-tree over the splats' boxes and intersects
- * rays with one of two surface models through one interface:
+ * What it does: builds a SAH kd-tree over the splats' boxes (or, for the
+ * ISO, an octree) and intersects rays with one of three surface models
+ * through one interface:
  *   SG_SURFACE_MLS   the implicit surface of Adamson & Alexa as used by Wald &
  *                    Seidel 2005: F(x) = (W(x) x - sum w_i p_i) . sum w_i n_i,
  *                    found by k regular samples per leaf cell with sign change
