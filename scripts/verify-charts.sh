@@ -4,8 +4,11 @@
 #   verify_surfaces.png   frame time against error per surface model/option
 #   verify_bake.png       bake time against error, both indirect estimators
 #   verify_gi.png         CPU time against error on concave close-ups (log-log)
-#   verify_scaling.png    fps, memory, per-ray traversal, times against model size
+#   verify_scaling.png    fps, memory, per-ray traversal, times against model
+#                         size, per surface model
 #   verify_stability.png  the stability map as a heat-map table
+# The surface models and their colours are the table below (names as in the
+# CSVs, src/verify/verify_int.h): a new model is one more line.
 # A chart whose CSV is absent is skipped. Exit 77 when gnuplot is missing.
 set -euo pipefail
 dir="${1:?usage: verify-charts.sh DIR}"
@@ -15,6 +18,11 @@ if gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1; then
 else
   term() { echo "png size $1,$2"; }
 fi
+models=(mls disk iso)
+model_title=(MLS disks ISO)
+model_colour=("#1f6fb4" "#d62728" "#2ca02c")
+model_pt=(7 5 9)
+model_label=("0,0.8" "0,-0.8" "0,1.6") # label offsets (characters) of each model's points
 tmpd="$(mktemp -d)"
 trap 'rm -rf "$tmpd"' EXIT
 # Writes gnuplot's output to a temporary name, then renames it.
@@ -29,10 +37,24 @@ plot() { # plot OUT.png < script
 csv="$dir/surfaces.csv"
 if [ -f "$csv" ]; then
   # columns: 1 config, 2 model, 7 renderer, 10 frame_s, 12 frame_size, 13 rel_mse, 17 nodes/ray, 20 splats/ray
-  awk -F, 'NR > 1 && $7 == "bake_lookup" && $2 == "mls" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sb_mls"
-  awk -F, 'NR > 1 && $7 == "bake_lookup" && $2 == "disk" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sb_disk"
-  awk -F, 'NR > 1 && $7 == "direct" && $1 != "mls" && $2 == "mls" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sd_mls"
-  awk -F, 'NR > 1 && $7 == "direct" && $2 == "disk" { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sd_disk"
+  sb=() sd=()
+  for i in "${!models[@]}"; do
+    m="${models[$i]}" c="${model_colour[$i]}" pt="${model_pt[$i]}" t="${model_title[$i]}"
+    off="${model_label[$i]}"
+    awk -F, -v m="$m" 'NR > 1 && $7 == "bake_lookup" && $2 == m { print $10 * 1000, $13, $1 }' "$csv" >"$tmpd/sb_$m"
+    # the first MLS row's direct frame is the yardstick (0): left out
+    awk -F, -v m="$m" 'NR > 1 && $7 == "direct" && $2 == m && !(m == "mls" && $1 == "mls") { print $10 * 1000, $13, $1 }' \
+      "$csv" >"$tmpd/sd_$m"
+    if [ -s "$tmpd/sb_$m" ]; then
+      sb+=("\"$tmpd/sb_$m\" u 1:2 w p pt $pt ps 1.5 lc rgb \"$c\" t \"$t\"")
+      sb+=("\"$tmpd/sb_$m\" u 1:2:3 w labels offset char $off font \",8\" tc rgb \"$c\" notitle")
+    fi
+    if [ -s "$tmpd/sd_$m" ]; then
+      [ "$m" = mls ] && t="MLS options"
+      sd+=("\"$tmpd/sd_$m\" u 1:(\$2 > 0 ? \$2 : 1e-6) w p pt $pt ps 1.5 lc rgb \"$c\" t \"$t\"")
+      sd+=("\"$tmpd/sd_$m\" u 1:(\$2 > 0 ? \$2 : 1e-6):3 w labels offset char $off font \",8\" tc rgb \"$c\" notitle")
+    fi
+  done
   fs="$(awk -F, 'NR == 2 { print $12 }' "$csv")"
   pts="$(awk -F, 'NR == 2 { print $6 }' "$csv")"
   plot "$dir/verify_surfaces.png" <<GP
@@ -45,17 +67,11 @@ set key top left box opaque font ",9"
 set xlabel "bake lookup frame time (ms)"
 set ylabel "relMSE against the converged reference of the default MLS surface"
 set title "bake + lookup (global illumination)"
-plot "$tmpd/sb_mls" u 1:2 w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS", \
-     "$tmpd/sb_mls" u 1:2:3 w labels offset char 0,0.8 font ",8" notitle, \
-     "$tmpd/sb_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
-     "$tmpd/sb_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
+plot $(IFS=,; echo "${sb[*]}")
 set xlabel "direct renderer frame time (ms), SG_SHADE_SIMPLE, model only"
 set ylabel "relMSE against the default MLS surface's direct frame (the yardstick, 0)"
 set title "direct renderer (geometry only)"
-plot "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6) w p pt 7 ps 1.5 lc rgb "#1f6fb4" t "MLS options", \
-     "$tmpd/sd_mls" u 1:(\$2 > 0 ? \$2 : 1e-6):3 w labels offset char 0,0.8 font ",8" notitle, \
-     "$tmpd/sd_disk" u 1:2 w p pt 5 ps 1.5 lc rgb "#d62728" t "disks", \
-     "$tmpd/sd_disk" u 1:2:3 w labels offset char 0,-0.8 font ",8" notitle
+plot $(IFS=,; echo "${sd[*]}")
 unset multiplot
 GP
 fi
@@ -151,37 +167,51 @@ fi
 csv="$dir/scaling.csv"
 if [ -f "$csv" ] && [ "$(wc -l <"$csv")" -gt 2 ]; then
   # 1 points, 3 build_s, 4 scene_mib, 5 rss_mib, 7 direct_fps, 9 nodes, 10 leaves, 11 isects, 12 splats,
-  # 13 bake_s, 14 bake_mib, 16 lookup_fps, 17 frame_size
+  # 13 bake_s, 14 bake_mib, 16 lookup_fps, 17 frame_size, 18 model (absent before the ISO: MLS)
   fs="$(awk -F, 'NR == 2 { print $17 }' "$csv")"
-  awk -F, 'NR > 1' OFS=' ' "$csv" | tr ',' ' ' >"$tmpd/sc"
+  # Per panel: the series (column, dash type, title); per model one colour.
+  panel() { # panel COL:DT:TITLE ... -> a plot command over every model present
+    local out=() i spec col dt t
+    for i in "${!models[@]}"; do
+      [ -s "$tmpd/sc_${models[$i]}" ] || continue
+      for spec in "$@"; do
+        col="${spec%%:*}" spec="${spec#*:}" dt="${spec%%:*}" t="${spec#*:}"
+        out+=("\"$tmpd/sc_${models[$i]}\" u 1:$col w lp lw 2 dt $dt pt ${model_pt[$i]} lc rgb \"${model_colour[$i]}\" t \"${model_title[$i]}: $t\"")
+      done
+    done
+    (IFS=,; echo "${out[*]}")
+  }
+  for m in "${models[@]}"; do
+    awk -F, -v m="$m" 'NR > 1 && ($18 == "" ? "mls" : $18) == m' "$csv" | tr ',' ' ' >"$tmpd/sc_$m"
+  done
   plot "$dir/verify_scaling.png" <<GP
-set terminal $(term 1300 900)
-set multiplot layout 2,2 title "Scaling with model size (model alone, ${fs}x${fs} frames)"
+set terminal $(term 1500 1050)
+set multiplot layout 2,2 title "Scaling with model size per surface model (model alone, ${fs}x${fs} frames)"
 set logscale x
 set grid lc rgb "#cccccc"
-set key top right box opaque font ",9"
+set key top right box opaque font ",8"
 set xlabel "points"
 set format x "10^{%L}"
 set logscale y
 set ylabel "frames per second"
 set title "frame rate"
-plot "$tmpd/sc" u 1:7 w lp lw 2 pt 7 t "direct renderer (1 ray/pixel)", "$tmpd/sc" u 1:16 w lp lw 2 pt 5 t "bake lookup frame"
+plot $(panel "7:1:direct renderer (1 ray/pixel)" "16:2:bake lookup frame")
 set ylabel "MiB"
 set title "memory"
 set key top left
-plot "$tmpd/sc" u 1:4 w lp lw 2 pt 7 t "scene (kd-tree + splats)", "$tmpd/sc" u 1:14 w lp lw 2 pt 5 t "bake (irradiance)", "$tmpd/sc" u 1:5 w lp lw 2 pt 9 t "process RSS"
+plot $(panel "4:1:scene" "14:2:bake" "5:3:process RSS")
 unset logscale y
 set ylabel "per primary ray"
 set yrange [0:45]
 set key top right
 set title "traversal (sg\\\\_ray\\\\_stats)"
-plot "$tmpd/sc" u 1:9 w lp lw 2 pt 7 t "node steps", "$tmpd/sc" u 1:10 w lp lw 2 pt 5 t "leaves", "$tmpd/sc" u 1:12 w lp lw 2 pt 9 t "splats evaluated"
+plot $(panel "9:1:node steps" "10:2:leaves" "12:3:splats evaluated")
 set logscale y
 set autoscale y
 set key top left
 set ylabel "seconds"
 set title "build and bake time"
-plot "$tmpd/sc" u 1:3 w lp lw 2 pt 7 t "world build (sampling, radii, kd-tree)", "$tmpd/sc" u 1:13 w lp lw 2 pt 5 t "bake"
+plot $(panel "3:1:world build (sampling, radii, tree)" "13:2:bake")
 unset multiplot
 GP
 fi
@@ -192,11 +222,13 @@ if [ -f "$csv" ]; then
   # Columns of stability.csv: 1 case, 2 model, 3 status, 7 hole_rate, 9 normal_err_deg, 11 bake_rel_mse,
   # 12 bake_energy_ratio, 14 bake_nan, 15 ref_nan, 23 ref_energy_vs_clean, 25 back_hit_rate.
   # Cells: x = metric x model, y = case; colour = badness in [0, 1] on each metric's own scale.
-  awk -F, '
-    BEGIN { n = 0 }
+  nm=${#models[@]}
+  awk -F, -v mlist="${models[*]}" '
+    BEGIN { n = 0; nm = split(mlist, ml, " "); for (i = 1; i <= nm; i++) mi[ml[i]] = i - 1 }
     NR == 1 { next }
+    !($2 in mi) { next }
     { if (!($1 in row)) { row[$1] = n; name[n++] = $1 }
-      m = ($2 == "disk"); y = row[$1]
+      m = mi[$2]; y = row[$1]
       ok = ($3 == "ok" || $3 == "nan")
       v[0] = $7 * 100;             s[0] = 10;    f[0] = "%.1f"   # holes %
       v[1] = $9;                   s[1] = 30;    f[1] = "%.1f"   # normal error, degrees
@@ -206,7 +238,7 @@ if [ -f "$csv" ]; then
       v[5] = ($23 == "" ? "" : ($23 - 1) * 100); s[5] = 10; f[5] = "%+.1f" # reference energy vs clean %
       v[6] = $25 * 100;            s[6] = 1;     f[6] = "%.2f"   # back hits, % of the reference hits
       for (k = 0; k < 7; k++) {
-        x = 2 * k + m
+        x = nm * k + m
         if (!ok) { c = 1; lab = $3 }
         else if (v[k] == "") { c = -1; lab = "-" }
         else { a = v[k] < 0 ? -v[k] : v[k]; c = a / s[k]; if (c > 1) c = 1; lab = sprintf(f[k], v[k]) }
@@ -214,23 +246,29 @@ if [ -f "$csv" ]; then
       }
     }
     END {
-      for (y = 0; y < n; y++) for (x = 0; x < 14; x++) print x, n - 1 - y, cell[x, y], text[x, y] > "'"$tmpd"'/st"
+      for (y = 0; y < n; y++) for (x = 0; x < 7 * nm; x++)
+        print x, n - 1 - y, ((x, y) in cell ? cell[x, y] : -1), ((x, y) in text ? text[x, y] : "-") > "'"$tmpd"'/st"
       for (y = 0; y < n; y++) print n - 1 - y, name[y] > "'"$tmpd"'/st_names"
       print n > "'"$tmpd"'/st_n"
     }' "$csv"
   n="$(cat "$tmpd/st_n")"
   ytics="$(awk '{ printf "%s\"%s\" %d", (NR > 1 ? ", " : ""), $2, $1 }' "$tmpd/st_names")"
+  metric=("holes %%" "normal err deg" "bake energy %%" "bake relMSE" "NaN px" "ref vs clean %%" "back hits %%")
+  scale=(10 30 20 0.1 1 10 1)
+  xt="" x2t=""
+  for k in "${!metric[@]}"; do
+    for m in "${!models[@]}"; do
+      xt+="${xt:+, }\"${metric[$k]}\\n${model_title[$m]}\" $((nm * k + m))"
+    done
+    x2t+="${x2t:+, }\"scale ${scale[$k]}\" $(awk -v k="$k" -v nm="$nm" 'BEGIN { print nm * k + (nm - 1) / 2 }')"
+  done
   plot "$dir/verify_stability.png" <<GP
-set terminal $(term 1700 $((140 + 34 * n)))
+set terminal $(term $((300 + 90 * 7 * nm)) $((140 + 34 * n)))
 set title "Stability map: case x method (colour: 0 = fine, red = at or beyond the column's scale; grey: n/a)"
-set xrange [-0.5:13.5]
+set xrange [-0.5:$((7 * nm)) - 0.5]
 set yrange [-0.5:$n - 0.5]
-set xtics ("holes %%\nMLS" 0, "holes %%\ndisks" 1, "normal err deg\nMLS" 2, "normal err deg\ndisks" 3, \
-  "bake energy %%\nMLS" 4, "bake energy %%\ndisks" 5, "bake relMSE\nMLS" 6, "bake relMSE\ndisks" 7, \
-  "NaN px\nMLS" 8, "NaN px\ndisks" 9, "ref vs clean %%\nMLS" 10, "ref vs clean %%\ndisks" 11, \
-  "back hits %%\nMLS" 12, "back hits %%\ndisks" 13) font ",8"
-set x2tics ("scale 10" 0.5, "scale 30" 2.5, "scale 20" 4.5, "scale 0.1" 6.5, "scale 1" 8.5, "scale 10" 10.5, \
-  "scale 1" 12.5) font ",8"
+set xtics ($xt) font ",8"
+set x2tics ($x2t) font ",8"
 set ytics ($ytics) font ",9" noenhanced
 set cbrange [-1:1]
 set palette defined (-1 "#dddddd", -0.001 "#dddddd", 0 "#ffffff", 0.3 "#ffe9a8", 0.7 "#f59b5b", 1 "#c8102e")

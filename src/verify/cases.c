@@ -328,7 +328,7 @@ static void model_json(json_buf *b, int first, const char *ply, float radius_sca
             "%s{\"path\": \"%s\", \"radius_scale\": %g, \"transform\": {\"scale\": %.9g},"
             " \"material\": {\"type\": \"lambert\", \"albedo\": [0.7, 0.7, 0.7], \"use_point_colors\": false},"
             " \"surface\": {\"model\": \"%s\"}}",
-            first ? "" : ", ", ply, (double)radius_scale, (double)scale, model == SG_SURFACE_DISK ? "disk" : "mls");
+            first ? "" : ", ", ply, (double)radius_scale, (double)scale, sg_verify__model_name(model));
 }
 
 sg_status sg_verify_case_make(int index, sg_surface_model model, int small, const char *work_dir,

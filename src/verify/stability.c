@@ -1,5 +1,6 @@
 /* stability.c — the stability map (verify.h, STABILITY): every case of
- * cases.h under both surface models, each in a child process with a time
+ * cases.h under every surface model (verify_int.h SG_VERIFY__MODELS: MLS,
+ * disks, the ISO octree), each in a child process with a time
  * limit, so that a crash or a hang is a flagged row, not a lost run.
  *
  * Invariants:
@@ -31,6 +32,7 @@
 #include "verify/verify_int.h"
 
 #define STABILITY_DEPTH 64 /* path depth of the references (run_case) */
+#define M SG_VERIFY__MODELS /* rows[M * case + model] */
 #define NFIG 20 /* figures a child reports, in the order of fig_names */
 static const char *const fig_names[NFIG] = {
     "points",       "truth_pixels", "hole_rate", "spill_rate", "normal_err_deg", "flipped_rate",
@@ -41,8 +43,6 @@ enum { F_POINTS, F_TRUTHPIX, F_HOLE, F_SPILL, F_NORMAL, F_FLIP, F_RELMSE, F_ENER
        F_REFLUM, F_BAKELUM, F_WORLDS, F_REFS, F_CACHED, F_BAKES, F_NOISE, F_BACK, F_CAMBACK };
 /* The CSV writes figures [0, F_BACK), then ref_energy_vs_clean and
  * baseline, then the rest: columns keep the places the charts read. */
-
-static const char *model_name(sg_surface_model m) { return m == SG_SURFACE_DISK ? "disk" : "mls"; }
 
 typedef struct sizes {
     int image, spp, direct; /* direct: envmap rays per sample site (twice as many cosine rays) */
@@ -124,7 +124,7 @@ static sg_status run_case(const vctx *c, int ci, sg_surface_model model, double 
     if (st != SG_OK)
         goto done;
     char name[128];
-    snprintf(name, sizeof name, "stability_%s_%s%s", vc.name, model_name(model), c->d.ci ? "_ci" : "");
+    snprintf(name, sizeof name, "stability_%s_%s%s", vc.name, sg_verify__model_name(model), c->d.ci ? "_ci" : "");
     sg_image_metrics m;
     st = sg_verify__compare(c, &frame, &ref.mean, name, &m, err);
     if (st != SG_OK)
@@ -180,7 +180,7 @@ typedef struct row {
 static void run_child(const vctx *c, int ci, sg_surface_model model, row *r)
 {
     char path[4300];
-    snprintf(path, sizeof path, "%s/row_%s_%s.txt", c->d.work_dir, sg_verify_case_name(ci), model_name(model));
+    snprintf(path, sizeof path, "%s/row_%s_%s.txt", c->d.work_dir, sg_verify_case_name(ci), sg_verify__model_name(model));
     remove(path);
     memset(r, 0, sizeof *r);
     if (c->d.log)
@@ -220,7 +220,7 @@ static void run_child(const vctx *c, int ci, sg_surface_model model, row *r)
     }
     if (WIFSIGNALED(wstatus)) {
         snprintf(r->status, sizeof r->status, "crash");
-        sg_verify__log(c, "  %s/%s: killed by signal %d\n", sg_verify_case_name(ci), model_name(model),
+        sg_verify__log(c, "  %s/%s: killed by signal %d\n", sg_verify_case_name(ci), sg_verify__model_name(model),
                        WTERMSIG(wstatus));
         return;
     }
@@ -232,7 +232,7 @@ static void run_child(const vctx *c, int ci, sg_surface_model model, row *r)
     }
     if (WEXITSTATUS(wstatus) != 0) {
         if (fgets(line, sizeof line, f))
-            sg_verify__log(c, "  %s/%s: %s", sg_verify_case_name(ci), model_name(model), line);
+            sg_verify__log(c, "  %s/%s: %s", sg_verify_case_name(ci), sg_verify__model_name(model), line);
         fclose(f);
         snprintf(r->status, sizeof r->status, "error");
         return;
@@ -264,7 +264,7 @@ static void csv_num(vtable *t, int have, double v, const char *fmt)
 sg_status sg_verify__stability(vctx *c, sg_error *err)
 {
     int n = sg_verify_case_count();
-    row *rows = calloc((size_t)n * 2, sizeof *rows);
+    row *rows = calloc((size_t)n * M, sizeof *rows);
     if (!rows)
         return sg_error_set(err, SG_ERR_NOMEM, "stability: out of memory");
     if (!sg_verify__make_dirs(c->d.work_dir)) {
@@ -272,9 +272,13 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
         return sg_error_set(err, SG_ERR_IO, "%s: cannot create: %s", c->d.work_dir, strerror(errno));
     }
     sizes z = case_sizes(c);
-    sg_verify__log(c, "stability: %d cases x {mls, disk}; %dx%d, reference %d spp, bake %d + %d rays per sample "
+    char models[64] = "";
+    for (int m = 0; m < M; m++)
+        snprintf(models + strlen(models), sizeof models - strlen(models), "%s%s", m ? ", " : "",
+                 sg_verify__model_name((sg_surface_model)m));
+    sg_verify__log(c, "stability: %d cases x {%s}; %dx%d, reference %d spp, bake %d + %d rays per sample "
                       "site; limit %.3g s per run\n",
-                   n, z.image, z.image, z.spp, z.direct, 2 * z.direct, c->d.case_timeout_s);
+                   n, models, z.image, z.image, z.spp, z.direct, 2 * z.direct, c->d.case_timeout_s);
     int run[64] = {0}; /* run[i]: case i selected (--case) */
     if (n > 64) {
         free(rows);
@@ -284,8 +288,8 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
         run[i] = !c->d.only_case || strcmp(c->d.only_case, sg_verify_case_name(i)) == 0;
         if (!run[i])
             continue;
-        for (int m = 0; m < 2; m++) {
-            row *r = &rows[2 * i + m];
+        for (int m = 0; m < M; m++) {
+            row *r = &rows[M * i + m];
             run_child(c, i, (sg_surface_model)m, r);
             c->sum->cases_run++;
             if (strcmp(r->status, "ok") != 0)
@@ -294,12 +298,12 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
                 sg_verify__log(c,
                                "  %-16s %-4s %-7s %5.1f s  holes %6.2f%%  normal %6.2f deg  bake relMSE %.4f energy "
                                "%.4f  NaN %g/%g\n",
-                               sg_verify_case_name(i), model_name((sg_surface_model)m), r->status, r->wall,
+                               sg_verify_case_name(i), sg_verify__model_name((sg_surface_model)m), r->status, r->wall,
                                100 * r->fig[F_HOLE], r->fig[F_NORMAL], r->fig[F_RELMSE], r->fig[F_ENERGY],
                                r->fig[F_BAKENAN], r->fig[F_REFNAN]);
             else
                 sg_verify__log(c, "  %-16s %-4s %-7s %5.1f s\n", sg_verify_case_name(i),
-                               model_name((sg_surface_model)m), r->status, r->wall);
+                               sg_verify__model_name((sg_surface_model)m), r->status, r->wall);
         }
     }
     vtable t = {0};
@@ -311,14 +315,14 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
         sg_verify__tprintf(&t, ",%s", fig_names[k]);
     sg_verify__tprintf(&t, "\n");
     for (int i = 0; i < n; i++)
-        for (int m = 0; m < 2 && run[i]; m++) {
-            const row *r = &rows[2 * i + m];
-            sg_verify__tprintf(&t, "%s,%s,%s,%.3f", sg_verify_case_name(i), model_name((sg_surface_model)m),
+        for (int m = 0; m < M && run[i]; m++) {
+            const row *r = &rows[M * i + m];
+            sg_verify__tprintf(&t, "%s,%s,%s,%.3f", sg_verify_case_name(i), sg_verify__model_name((sg_surface_model)m),
                                r->status, r->wall);
             for (int k = 0; k < F_BACK; k++)
                 csv_num(&t, r->have, r->fig[k], "%.6g");
             int base = sg_verify_case_baseline(i);
-            const row *b = base >= 0 ? &rows[2 * base + m] : NULL;
+            const row *b = base >= 0 ? &rows[M * base + m] : NULL;
             int have = r->have && b && b->have && b->fig[F_REFLUM] > 0;
             csv_num(&t, have, have ? r->fig[F_REFLUM] / b->fig[F_REFLUM] : 0, "%.6g");
             sg_verify__tprintf(&t, ",%s", base >= 0 ? sg_verify_case_name(base) : "-");
@@ -331,51 +335,53 @@ sg_status sg_verify__stability(vctx *c, sg_error *err)
     c->sum->rows += t.rows;
     sg_verify__tfree(&t);
 
-    /* The Markdown map: one line per case, MLS and disks side by side. */
+    /* The Markdown map: one line per case, the models side by side in
+     * each cell ("mls / disk / iso"). */
+    char head[64] = "";
+    for (int m = 0; m < M; m++)
+        snprintf(head + strlen(head), sizeof head - strlen(head), "%s%s", m ? " / " : "",
+                 sg_verify__model_name((sg_surface_model)m));
     vtable md = {0};
     sg_verify__tprintf(&md,
-                       "| case | status (mls / disk) | holes %% (mls / disk) | normal error deg | flipped %% | "
+                       "| case | status (%s) | holes %% (%s) | normal error deg | flipped %% | "
                        "bake energy error %% | bake relMSE | NaN bake+ref | back hits %% of hits | "
                        "reference energy vs clean |\n"
-                       "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+                       "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+                       head, head);
+    static const char *const fmt[7] = {"%.2f", "%.1f", "%.1f", "%+.1f", "%.4f", "%g", "%.3f"};
     for (int i = 0; i < n; i++) {
         if (!run[i])
             continue;
-        const row *a = &rows[2 * i], *d = &rows[2 * i + 1];
-        char cell[8][80];
-        const row *rr[2] = {a, d};
-        double v[2][7];
-        for (int m = 0; m < 2; m++) {
-            const row *r = rr[m];
-            v[m][0] = 100 * r->fig[F_HOLE];
-            v[m][1] = r->fig[F_NORMAL];
-            v[m][2] = 100 * r->fig[F_FLIP];
-            v[m][3] = 100 * (r->fig[F_ENERGY] - 1);
-            v[m][4] = r->fig[F_RELMSE];
-            v[m][5] = r->fig[F_BAKENAN] + r->fig[F_REFNAN];
-            v[m][6] = 100 * r->fig[F_BACK];
-        }
-        const char *fmt[7] = {"%.2f", "%.1f", "%.1f", "%+.1f", "%.4f", "%g", "%.3f"};
+        const row *rr = &rows[M * i];
+        sg_verify__tprintf(&md, "| %s | ", sg_verify_case_name(i));
+        for (int m = 0; m < M; m++)
+            sg_verify__tprintf(&md, "%s%s", m ? " / " : "", rr[m].status);
         for (int k = 0; k < 7; k++) {
-            char x[2][32];
-            for (int m = 0; m < 2; m++)
-                if (rr[m]->have)
-                    snprintf(x[m], sizeof x[m], fmt[k], v[m][k]);
+            sg_verify__tprintf(&md, " | ");
+            for (int m = 0; m < M; m++) {
+                const row *r = &rr[m];
+                double v[7] = {100 * r->fig[F_HOLE], r->fig[F_NORMAL], 100 * r->fig[F_FLIP],
+                               100 * (r->fig[F_ENERGY] - 1), r->fig[F_RELMSE], r->fig[F_BAKENAN] + r->fig[F_REFNAN],
+                               100 * r->fig[F_BACK]};
+                char x[32];
+                if (r->have)
+                    snprintf(x, sizeof x, fmt[k], v[k]);
                 else
-                    snprintf(x[m], sizeof x[m], "–");
-            snprintf(cell[k], sizeof cell[k], "%s / %s", x[0], x[1]);
+                    snprintf(x, sizeof x, "–");
+                sg_verify__tprintf(&md, "%s%s", m ? " / " : "", x);
+            }
         }
-        sg_verify__tprintf(&md, "| %s | %s / %s | %s | %s | %s | %s | %s | %s | %s | ", sg_verify_case_name(i),
-                           a->status, d->status, cell[0], cell[1], cell[2], cell[3], cell[4], cell[5], cell[6]);
+        sg_verify__tprintf(&md, " | ");
         int base = sg_verify_case_baseline(i);
-        for (int m = 0; m < 2; m++) {
-            const row *r = rr[m], *b = base >= 0 ? &rows[2 * base + m] : NULL;
+        for (int m = 0; m < M; m++) {
+            const row *r = &rr[m], *b = base >= 0 ? &rows[M * base + m] : NULL;
+            sg_verify__tprintf(&md, "%s", m ? " / " : "");
             if (r->have && b && b->have && b->fig[F_REFLUM] > 0)
                 sg_verify__tprintf(&md, "%.3f", r->fig[F_REFLUM] / b->fig[F_REFLUM]);
             else
                 sg_verify__tprintf(&md, "–");
-            sg_verify__tprintf(&md, m == 0 ? " / " : " |\n");
         }
+        sg_verify__tprintf(&md, " |\n");
     }
     if (st == SG_OK)
         st = sg_verify__twrite(&md, c->d.out_dir, "stability.md", err);

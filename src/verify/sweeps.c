@@ -34,6 +34,7 @@
 #define GLOSSY_SPECULAR 0.3
 #define GROUND_ALBEDO 0.5f
 #define TARGET_REL_MSE 0.01
+#define ISO_DEFAULT_TOLERANCE 0.05 /* sg_iso_desc.tolerance's default (iso.h), for the CSV */
 
 static const float view_dir[3] = {0.6f, -0.35f, -1.0f};
 
@@ -49,12 +50,13 @@ typedef struct mscene {
 typedef struct surf_cfg {
     const char *name;
     sg_surface_model model;
-    unsigned kd_disable;
-    int spc;
+    unsigned kd_disable;   /* sg_kd_disable flags (MLS and disks)            */
+    int spc;               /* MLS samples per cell                           */
     float radius_scale;
+    float iso_tolerance;   /* ISO patch error, smallest radii; 0 = default   */
 } surf_cfg;
 
-static const surf_cfg default_cfg = {"mls", SG_SURFACE_MLS, 0, 8, 1.0f};
+static const surf_cfg default_cfg = {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0.0f};
 
 typedef struct plan {
     size_t points;         /* model points of SURFACES, BAKE, HEADLINE    */
@@ -94,13 +96,25 @@ static sg_status mscene_setup(const char *name, const char *mesh, const char *en
                            &s->cam, err);
 }
 
+/* The ISO tolerance cfg builds with (the CSV's column; 0 for the other
+ * models). */
+static double iso_tolerance(const surf_cfg *cfg)
+{
+    if (cfg->model != SG_SURFACE_ISO)
+        return 0.0;
+    return cfg->iso_tolerance > 0 ? (double)cfg->iso_tolerance : ISO_DEFAULT_TOLERANCE;
+}
+
 static void surface_json(char *out, size_t cap, const surf_cfg *cfg)
 {
+    char tol[64] = "";
+    if (cfg->iso_tolerance > 0)
+        snprintf(tol, sizeof tol, ", \"iso_tolerance\": %g", (double)cfg->iso_tolerance);
     snprintf(out, cap,
              "\"surface\": {\"model\": \"%s\", \"samples_per_cell\": %d, \"refinements\": {\"shrink\": %s, "
-             "\"encourage\": %s, \"collapse\": %s}}",
-             cfg->model == SG_SURFACE_DISK ? "disk" : "mls", cfg->spc, (cfg->kd_disable & 1u) ? "false" : "true",
-             (cfg->kd_disable & 2u) ? "false" : "true", (cfg->kd_disable & 4u) ? "false" : "true");
+             "\"encourage\": %s, \"collapse\": %s}%s}",
+             sg_verify__model_name(cfg->model), cfg->spc, (cfg->kd_disable & 1u) ? "false" : "true",
+             (cfg->kd_disable & 2u) ? "false" : "true", (cfg->kd_disable & 4u) ? "false" : "true", tol);
 }
 
 /* The scene file of s with points model samples, configuration cfg on
@@ -263,23 +277,27 @@ static double per_ray(uint64_t v, uint64_t rays) { return rays ? (double)v / (do
 
 static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_error *err)
 {
+    /* The first is the yardstick (reference and direct frame) of the rest. */
     static const surf_cfg full[] = {
-        {"mls", SG_SURFACE_MLS, 0, 8, 1.0f},          {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f},
-        {"mls_no_shrink", SG_SURFACE_MLS, 1, 8, 1.0f}, {"mls_no_collapse", SG_SURFACE_MLS, 4, 8, 1.0f},
-        {"mls_spc4", SG_SURFACE_MLS, 0, 4, 1.0f},     {"mls_spc16", SG_SURFACE_MLS, 0, 16, 1.0f},
-        {"mls_r0.75", SG_SURFACE_MLS, 0, 8, 0.75f},   {"mls_r1.5", SG_SURFACE_MLS, 0, 8, 1.5f},
-        {"disk", SG_SURFACE_DISK, 0, 8, 1.0f},        {"disk_r0.75", SG_SURFACE_DISK, 0, 8, 0.75f},
-        {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f}};
-    static const surf_cfg ci[] = {{"mls", SG_SURFACE_MLS, 0, 8, 1.0f},
-                                  {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f},
-                                  {"disk", SG_SURFACE_DISK, 0, 8, 1.0f},
-                                  {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f}};
+        {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0},          {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0},
+        {"mls_no_shrink", SG_SURFACE_MLS, 1, 8, 1.0f, 0}, {"mls_no_collapse", SG_SURFACE_MLS, 4, 8, 1.0f, 0},
+        {"mls_spc4", SG_SURFACE_MLS, 0, 4, 1.0f, 0},     {"mls_spc16", SG_SURFACE_MLS, 0, 16, 1.0f, 0},
+        {"mls_r0.75", SG_SURFACE_MLS, 0, 8, 0.75f, 0},   {"mls_r1.5", SG_SURFACE_MLS, 0, 8, 1.5f, 0},
+        {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0},        {"disk_r0.75", SG_SURFACE_DISK, 0, 8, 0.75f, 0},
+        {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0},   {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0},
+        {"iso_tol0.02", SG_SURFACE_ISO, 0, 8, 1.0f, 0.02f}, {"iso_tol0.1", SG_SURFACE_ISO, 0, 8, 1.0f, 0.1f},
+        {"iso_r1.5", SG_SURFACE_ISO, 0, 8, 1.5f, 0}};
+    static const surf_cfg ci[] = {{"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0},
+                                  {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0},
+                                  {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0},
+                                  {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0},
+                                  {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0}};
     const surf_cfg *cfgs = c->d.ci ? ci : full;
     int n = c->d.ci ? (int)(sizeof ci / sizeof ci[0]) : (int)(sizeof full / sizeof full[0]);
     vtable t = {0};
     sg_verify__tprintf(&t, "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,"
                            "frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,"
-                           "isects_per_ray,splats_per_ray,scene_mib,ref_noise\n");
+                           "isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance\n");
     sg_ref_result ref = {0};
     sg_image direct_ref = {0};
     double noise = 0;
@@ -329,14 +347,15 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
             for (int k = 0; k < 2; k++) {
                 const sg_image_metrics *m = k == 0 ? &mb : &md;
                 double fs = k == 0 ? br.frame_s : dr.frame_s;
-                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g\n",
-                                   cfg->name, cfg->model == SG_SURFACE_DISK ? "disk" : "mls", cfg->kd_disable, cfg->spc,
+                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g,%g\n",
+                                   cfg->name, sg_verify__model_name(cfg->model), cfg->kd_disable, cfg->spc,
                                    (double)cfg->radius_scale, splats, k == 0 ? "bake_lookup" : "direct", build_s,
                                    k == 0 ? br.bake_s : 0.0, fs, fs > 0 ? 1.0 / fs : 0.0, p->frame, m->rel_mse,
                                    m->energy_ratio_lum, m->p99_rel_error, m->nan_pixels + m->inf_pixels,
                                    per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
                                    per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), mib,
-                                   k == 0 ? noise : 0.0);
+                                   k == 0 ? noise : 0.0,
+                                   iso_tolerance(cfg));
                 t.rows++;
             }
             sg_verify__log(c, "  %-20s build %.2f s, bake %.2f s, lookup frame %.4f s, relMSE %.5f energy %.4f; "
@@ -511,48 +530,55 @@ static sg_status part_bake(vctx *c, const plan *p, const mscene *ms, sg_error *e
 
 /* ---- SCALING -------------------------------------------------------------- */
 
+/* Every size under every surface model (verify_int.h SG_VERIFY__MODELS),
+ * each with its defaults. */
 static sg_status part_scaling(vctx *c, const plan *p, const mscene *ms, sg_error *err)
 {
     vtable t = {0};
     sg_verify__tprintf(&t, "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,"
                            "leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,"
-                           "frame_size\n");
+                           "frame_size,model\n");
     sg_status st = SG_OK;
     sg_verify__log(c, "scaling: %s alone, frames %dx%d, bakes %d + %d rays per sample site\n", ms->name, p->frame,
                    p->frame, p->scaling_direct, 2 * p->scaling_direct);
-    for (int i = 0; i < c->d.n_sizes && st == SG_OK; i++) {
-        sg_scene_file sf = {0};
-        sg_world *w = NULL;
-        double build_s = 0;
-        st = build_world(ms, c->d.sizes[i], &default_cfg, 0, 0, &sf, &w, &build_s, err);
-        if (st != SG_OK)
-            break;
-        size_t splats;
-        double mib = world_mib(w, &splats);
-        direct_run dr;
-        st = run_direct(p, w, &ms->cam, &dr, err);
-        bake_run br = {0};
-        sg_bake_desc bd = {.direct_samples = p->scaling_direct, .gather_rays = 2 * p->scaling_direct};
-        if (st == SG_OK)
-            st = run_bake(p, w, &ms->cam, &bd, 0, &br, err);
-        double rss = sg_verify__rss_mib();
-        if (st == SG_OK) {
-            const sg_ray_stats *rs = &dr.st;
-            sg_verify__tprintf(&t, "%zu,%zu,%.4f,%.3f,%.1f,%.6f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.3f,%.6f,%.3f,%d\n",
-                               c->d.sizes[i], splats, build_s, mib, rss, dr.frame_s, 1.0 / dr.frame_s, dr.mrays,
+    for (int i = 0; i < c->d.n_sizes && st == SG_OK; i++)
+        for (int m = 0; m < SG_VERIFY__MODELS && st == SG_OK; m++) {
+            surf_cfg cfg = default_cfg;
+            cfg.model = (sg_surface_model)m;
+            cfg.name = sg_verify__model_name(cfg.model);
+            sg_scene_file sf = {0};
+            sg_world *w = NULL;
+            double build_s = 0;
+            st = build_world(ms, c->d.sizes[i], &cfg, 0, 0, &sf, &w, &build_s, err);
+            if (st != SG_OK)
+                break;
+            size_t splats;
+            double mib = world_mib(w, &splats);
+            direct_run dr;
+            st = run_direct(p, w, &ms->cam, &dr, err);
+            bake_run br = {0};
+            sg_bake_desc bd = {.direct_samples = p->scaling_direct, .gather_rays = 2 * p->scaling_direct};
+            if (st == SG_OK)
+                st = run_bake(p, w, &ms->cam, &bd, 0, &br, err);
+            double rss = sg_verify__rss_mib();
+            if (st == SG_OK) {
+                const sg_ray_stats *rs = &dr.st;
+                sg_verify__tprintf(&t, "%zu,%zu,%.4f,%.3f,%.1f,%.6f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.3f,%.6f,%.3f,%d,%s\n",
+                                   c->d.sizes[i], splats, build_s, mib, rss, dr.frame_s, 1.0 / dr.frame_s, dr.mrays,
+                                   per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
+                                   per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), br.bake_s, br.bake_mib,
+                                   br.frame_s, 1.0 / br.frame_s, p->frame, cfg.name);
+                t.rows++;
+                sg_verify__log(c, "  %9zu points %-4s: build %.2f s, %.1f MiB (RSS %.0f MiB); direct %.1f fps, %.1f nodes "
+                                  "%.2f leaves %.1f splats per ray; bake %.2f s, lookup %.1f fps\n",
+                               c->d.sizes[i], cfg.name, build_s, mib, rss, 1.0 / dr.frame_s,
                                per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
-                               per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), br.bake_s, br.bake_mib,
-                               br.frame_s, 1.0 / br.frame_s, p->frame);
-            t.rows++;
-            sg_verify__log(c, "  %9zu points: build %.2f s, %.1f MiB (RSS %.0f MiB); direct %.1f fps, %.1f nodes "
-                              "%.2f leaves %.1f splats per ray; bake %.2f s, lookup %.1f fps\n",
-                           c->d.sizes[i], build_s, mib, rss, 1.0 / dr.frame_s, per_ray(rs->nodes, rs->rays),
-                           per_ray(rs->leaves, rs->rays), per_ray(rs->splats, rs->rays), br.bake_s, 1.0 / br.frame_s);
+                               per_ray(rs->splats, rs->rays), br.bake_s, 1.0 / br.frame_s);
+            }
+            sg_image_free(&dr.img);
+            sg_world_destroy(w);
+            sg_scene_file_free(&sf);
         }
-        sg_image_free(&dr.img);
-        sg_world_destroy(w);
-        sg_scene_file_free(&sf);
-    }
     if (st == SG_OK)
         st = sg_verify__twrite(&t, c->d.out_dir, "scaling.csv", err);
     c->sum->rows += t.rows;

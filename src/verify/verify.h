@@ -3,7 +3,7 @@
  *
  * What it does, by part (desc.parts):
  *   STABILITY  every stability case (verify/cases.h) x surface model (MLS,
- *              disks), each in its own child process with a time limit:
+ *              disks, the ISO octree: verify_int.h), each in its own child process with a time limit:
  *              hole rate, spill rate, normal error (verify/truth.h) of the
  *              primary view; the bake's lookup frame against the cached
  *              converged reference (verify/refcache.h): relMSE, energy
@@ -15,8 +15,8 @@
  *              under courtyard.exr when ../shared/data has them, else the
  *              built-in bunny under the analytic sky; with `ci` always the
  *              bunny, without the ground) for each surface
- *              configuration (MLS / disks, kd-tree refinements, samples per
- *              cell, splat radius scale): one bake with fixed parameters;
+ *              configuration (MLS / disks / ISO, kd-tree refinements,
+ *              samples per cell, splat radius scale, ISO tolerance): one bake with fixed parameters;
  *              its lookup frame time and error against the reference of
  *              the default MLS surface; the direct renderer's frame time,
  *              per-ray traversal counters, and its difference from the
@@ -24,7 +24,8 @@
  *   BAKE       the default surface; bakes over photon count, gather k and
  *              direct-light samples (the sg_bake_desc fields): bake time,
  *              memory and error.
- *   SCALING    the main model alone at each of desc.sizes points: build
+ *   SCALING    the main model alone at each of desc.sizes points under
+ *              each surface model (its defaults): build
  *              time, memory (scene, bake, process RSS), direct frame time
  *              and per-ray counters (node steps, leaves, splats), bake time
  *              and lookup frame time.
@@ -82,7 +83,7 @@ typedef struct sg_verify_desc {
     size_t sizes[SG_VERIFY_MAX_SIZES]; /* SCALING point counts; n_sizes 0 =
                                 default 2k,8k,32k,128k,512k,1M (ci 2k,8k) */
     int n_sizes;
-    double case_timeout_s;   /* per stability child; default 300 (ci 60)   */
+    double case_timeout_s;   /* per stability child; default 300 (ci 120)  */
     const char *only_case;   /* STABILITY: just this case; NULL = all      */
     FILE *log;               /* progress lines; NULL = silent             */
 } sg_verify_desc;

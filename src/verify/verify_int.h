@@ -11,7 +11,19 @@
 #include "core/error.h"
 #include "io/image.h"
 #include "metrics/image_metrics.h"
+#include "surface/scene.h"
 #include "verify/verify.h"
+
+/* The surface models the verifier compares (stability map, surfaces and
+ * scaling sweeps), in sg_surface_model order, by their scene-file names
+ * (io/scene_file.h "surface": {"model": ...}): a model added to
+ * surface/scene.h is one more name here, and every part and CSV runs it. */
+#define SG_VERIFY__MODELS 3
+static inline const char *sg_verify__model_name(sg_surface_model m)
+{
+    static const char *const names[SG_VERIFY__MODELS] = {"mls", "disk", "iso"};
+    return (unsigned)m < SG_VERIFY__MODELS ? names[m] : "unknown";
+}
 
 typedef struct vctx {
     sg_verify_desc d;          /* defaults filled in                       */

@@ -1,7 +1,7 @@
 #!/bin/sh
 # verify_ci.sh — the verification suite's CI sweep end to end: runs
-# splatgi-verify --ci (every stability case at tiny size under both surface
-# models, and small surface / bake / scaling / headline sweeps on the
+# splatgi-verify --ci (every stability case at tiny size under every surface
+# model: MLS, disks, ISO; and small surface / bake / scaling / headline sweeps on the
 # built-in bunny), draws the charts, and checks that
 #   1. the program exits 0: no stability case flagged (NaN, timeout, crash);
 #   2. every CSV has exactly the expected header, every expected row once,
@@ -48,38 +48,45 @@ check_csv() {
 }
 rows() { awk 'END { print NR - 1 }' "$1"; }
 
-# Stability: every case x {mls, disk}, once each, ok, no NaN.
+# The surface models (src/verify/verify_int.h SG_VERIFY__MODELS).
+MODELS="mls disk iso"
+NMODELS=3
+# Stability: every case x every model, once each, ok, no NaN.
 S=$OUT/stability.csv
 check_csv "$S" "case,model,status,wall_s,points,truth_pixels,hole_rate,spill_rate,normal_err_deg,flipped_rate,bake_rel_mse,bake_energy_ratio,bake_p99,bake_nan,ref_nan,ref_lum,bake_lum,world_s,ref_s,ref_cached,bake_s,ref_noise_rel_mse,ref_energy_vs_clean,baseline,back_hit_rate,camera_back_hit_rate" "1,2,3,24" 23
 ncase=0
 for c in $("$VERIFY" --list-cases); do
   ncase=$((ncase + 1))
-  for m in mls disk; do
+  for m in $MODELS; do
     n=$(awk -F, -v c="$c" -v m="$m" '$1 == c && $2 == m' "$S" | wc -l)
     [ "$n" -eq 1 ] || fail "stability.csv: $n rows for $c/$m, want 1"
   done
 done
 [ "$ncase" -ge 11 ] || fail "only $ncase stability cases"
-[ "$(rows "$S")" -eq $((2 * ncase)) ] || fail "stability.csv: $(rows "$S") rows, want $((2 * ncase))"
+[ "$(rows "$S")" -eq $((NMODELS * ncase)) ] || fail "stability.csv: $(rows "$S") rows, want $((NMODELS * ncase))"
 awk -F, 'NR > 1 && ($3 != "ok" || $14 != 0 || $15 != 0) { print "flagged: " $0; bad = 1 } END { exit bad }' "$S" ||
   fail "stability cases flagged"
 awk -F, 'NR > 1 && $24 != "-" && $23 == "" { print "no energy against the clean twin: " $0; bad = 1 } END { exit bad }' "$S" ||
   fail "missing baseline figures"
 [ -s "$OUT/stability.md" ] || fail "no stability.md"
 
-# Sweeps: the --ci plan (src/verify/sweeps.c): 4 surface configurations x
-# 2 renderers, 7 bakes, 2 sizes, 1 headline model.
-check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise" "1,2,7"
-[ "$(rows "$OUT/surfaces.csv")" -eq 8 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 8"
-for c in mls mls_no_refinements disk disk_r1.5; do
+# Sweeps: the --ci plan (src/verify/sweeps.c): 5 surface configurations x
+# 2 renderers, 7 bakes, 2 sizes x 3 models, 1 headline model.
+check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance" "1,2,7"
+[ "$(rows "$OUT/surfaces.csv")" -eq 10 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 10"
+for c in mls mls_no_refinements disk disk_r1.5 iso; do
   for r in bake_lookup direct; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
 done
 check_csv "$OUT/bake.csv" "sweep,photons,k,direct,points,trace_s,gather_s,direct_s,bake_s,bake_mib,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,ref_noise,spacing,sample_points,glossy,glossy_res,glossy_rays,estimator,gather_rays" "1,24"
 [ "$(rows "$OUT/bake.csv")" -eq 7 ] || fail "bake.csv: $(rows "$OUT/bake.csv") rows, want 7"
-check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size" ""
-[ "$(awk -F, 'NR > 1 { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] || fail "scaling.csv: sizes are not 2000 8000"
+check_csv "$OUT/scaling.csv" "points,splats,build_s,scene_mib,rss_mib,direct_frame_s,direct_fps,mrays_s,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,bake_s,bake_mib,lookup_frame_s,lookup_fps,frame_size,model" "18"
+for m in $MODELS; do
+  [ "$(awk -F, -v m="$m" 'NR > 1 && $18 == m { printf "%s ", $1 }' "$OUT/scaling.csv")" = "2000 8000 " ] ||
+    fail "scaling.csv: the sizes of $m are not 2000 8000"
+done
+[ "$(rows "$OUT/scaling.csv")" -eq $((2 * NMODELS)) ] || fail "scaling.csv: $(rows "$OUT/scaling.csv") rows, want $((2 * NMODELS))"
 check_csv "$OUT/headline.csv" "model,points,splats,photons,k,direct,bake_s,lookup_frame_s,fps,frame_size,scene_mib,bake_mib,rss_mib,rel_mse,energy_ratio,p99,nan,ref_spp,image_size,ref_noise,estimator,gather_rays" "1,21"
 [ "$(awk -F, 'NR > 1 { print $1 }' "$OUT/headline.csv")" = "bunny" ] || fail "headline.csv: want one bunny row"
 [ -s "$OUT/headline.md" ] || fail "no headline.md"
@@ -108,6 +115,6 @@ ls "$OUT"/diff/*.png > /dev/null 2>&1 || fail "no difference images"
 # The reference cache: a second run of one case renders nothing new.
 "$VERIFY" --ci --parts stability --case sphere_clean --out-dir "$DIR/again" --cache-dir "$DIR/cache" \
   --work-dir "$DIR/work" > "$DIR/again.log" 2>&1 || { cat "$DIR/again.log"; fail "second run"; }
-awk -F, 'NR > 1 && $20 != 1 { bad = 1 } END { exit bad || NR != 3 }' "$DIR/again/stability.csv" ||
+awk -F, -v n=$((NMODELS + 1)) 'NR > 1 && $20 != 1 { bad = 1 } END { exit bad || NR != n }' "$DIR/again/stability.csv" ||
   fail "second run did not use the cached reference"
-echo "verify CI sweep: $ncase stability cases x 2 models ok, CSV complete, charts drawn"
+echo "verify CI sweep: $ncase stability cases x $NMODELS models ok, CSV complete, charts drawn"
