@@ -137,21 +137,17 @@ static int reserve(sg_photon_map *m, size_t need)
 {
     if (need <= m->capacity && m->model)
         return 1;
-    size_t cap = m->capacity + m->capacity / 2;
-    if (cap < need)
-        cap = need;
-    if (cap == 0)
-        cap = 1;
+    size_t cap = sg_grown_capacity(m->capacity, need);
     float **arrays[12] = {&m->px, &m->py, &m->pz, &m->nx, &m->ny, &m->nz,
                           &m->wx, &m->wy, &m->wz, &m->fr, &m->fg, &m->fb};
     for (int a = 0; a < 12; ++a) {
         void *p = *arrays[a];
-        if (!p ? !(p = sg_alloc_array(cap, sizeof(float))) : !sg_realloc_array(&p, m->count, cap, sizeof(float)))
+        if (!sg_realloc_array(&p, m->count, cap, sizeof(float)))
             return 0;
         *arrays[a] = p;
     }
     void *p = m->model;
-    if (!p ? !(p = sg_alloc_array(cap, sizeof(uint32_t))) : !sg_realloc_array(&p, m->count, cap, sizeof(uint32_t)))
+    if (!sg_realloc_array(&p, m->count, cap, sizeof(uint32_t)))
         return 0;
     m->model = p;
     m->capacity = cap;

@@ -70,25 +70,23 @@ static int reserve_sites(sg_site_data *sd, size_t samples)
 {
     if (samples <= sd->capacity && sd->first)
         return 1;
-    size_t cap = sd->capacity + sd->capacity / 2;
-    if (cap < samples)
-        cap = samples;
+    size_t cap = sg_grown_capacity(sd->capacity, samples);
     size_t old = sd->capacity;
     void *p;
     p = sd->ratio;
-    if (!(p ? sg_realloc_array(&p, 6 * old, 6 * cap, sizeof(float)) : !!(p = sg_alloc_array(6 * cap, sizeof(float)))))
+    if (!sg_realloc_array(&p, 6 * old, 6 * cap, sizeof(float)))
         return 0;
     sd->ratio = p;
     p = sd->unshadowed;
-    if (!(p ? sg_realloc_array(&p, 6 * old, 6 * cap, sizeof(float)) : !!(p = sg_alloc_array(6 * cap, sizeof(float)))))
+    if (!sg_realloc_array(&p, 6 * old, 6 * cap, sizeof(float)))
         return 0;
     sd->unshadowed = p;
     p = sd->sigma;
-    if (!(p ? sg_realloc_array(&p, 2 * old, 2 * cap, sizeof(float)) : !!(p = sg_alloc_array(2 * cap, sizeof(float)))))
+    if (!sg_realloc_array(&p, 2 * old, 2 * cap, sizeof(float)))
         return 0;
     sd->sigma = p;
     p = sd->dist;
-    if (!(p ? sg_realloc_array(&p, 2 * old, 2 * cap, sizeof(float)) : !!(p = sg_alloc_array(2 * cap, sizeof(float)))))
+    if (!sg_realloc_array(&p, 2 * old, 2 * cap, sizeof(float)))
         return 0;
     sd->dist = p;
     p = sd->first;
@@ -104,22 +102,18 @@ static int reserve_hits(sg_site_data *sd, size_t need)
 {
     if (need <= sd->hit_capacity && sd->hit_k)
         return 1;
-    size_t cap = sd->hit_capacity + sd->hit_capacity / 2;
-    if (cap < need)
-        cap = need;
-    if (cap == 0)
-        cap = 1;
+    size_t cap = sg_grown_capacity(sd->hit_capacity, need);
     size_t old = sd->hits;
     void *p = sd->hit_splat;
-    if (!(p ? sg_realloc_array(&p, old, cap, sizeof(uint32_t)) : !!(p = sg_alloc_array(cap, sizeof(uint32_t)))))
+    if (!sg_realloc_array(&p, old, cap, sizeof(uint32_t)))
         return 0;
     sd->hit_splat = p;
     p = sd->hit_model;
-    if (!(p ? sg_realloc_array(&p, old, cap, sizeof(uint32_t)) : !!(p = sg_alloc_array(cap, sizeof(uint32_t)))))
+    if (!sg_realloc_array(&p, old, cap, sizeof(uint32_t)))
         return 0;
     sd->hit_model = p;
     p = sd->hit_k;
-    if (!(p ? sg_realloc_array(&p, old, cap, sizeof(float)) : !!(p = sg_alloc_array(cap, sizeof(float)))))
+    if (!sg_realloc_array(&p, old, cap, sizeof(float)))
         return 0;
     sd->hit_k = p;
     sd->hit_capacity = cap;
@@ -145,7 +139,7 @@ static int push_hit(task *t, uint32_t splat, uint32_t model, float k)
     if (t->n == t->cap) {
         size_t cap = t->cap ? 2 * t->cap : 1024;
         void *p = t->hits;
-        if (!(p ? sg_realloc_array(&p, t->n, cap, sizeof *t->hits) : !!(p = sg_alloc_array(cap, sizeof *t->hits))))
+        if (!sg_realloc_array(&p, t->n, cap, sizeof *t->hits))
             return 0;
         t->hits = p;
         t->cap = cap;

@@ -26,9 +26,21 @@ void *sg_alloc_array(size_t count, size_t size);
 /* Same, zero-filled. */
 void *sg_calloc_array(size_t count, size_t size);
 
-/* Grows *ptr (from sg_alloc_array) to new_count elements, keeping the first
- * old_count; returns false (leaving *ptr valid) on failure. */
+/* Grows *ptr (from sg_alloc_array, or NULL: a first allocation) to
+ * new_count elements, keeping the first old_count; returns false (leaving
+ * *ptr valid) on failure. */
 bool sg_realloc_array(void **ptr, size_t old_count, size_t new_count, size_t size);
+
+/* The capacity of an array that must grow to hold need elements: half as
+ * much again as cap, at least need, at least 1 (appends in amortised
+ * constant time). */
+static inline size_t sg_grown_capacity(size_t cap, size_t need)
+{
+    size_t grown = cap + cap / 2;
+    if (grown < need)
+        grown = need;
+    return grown ? grown : 1;
+}
 
 void sg_free(void *ptr);
 

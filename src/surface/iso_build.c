@@ -113,14 +113,8 @@ static int grow(void **p, size_t *cap, size_t need, size_t size)
     size_t nc = *cap ? *cap : 64;
     while (nc < need)
         nc *= 2;
-    size_t old = *cap;
-    if (!*p) {
-        *p = sg_alloc_array(nc, size);
-        if (!*p)
-            return 0;
-    } else if (!sg_realloc_array(p, old, nc, size)) {
+    if (!sg_realloc_array(p, *cap, nc, size))
         return 0;
-    }
     *cap = nc;
     return 1;
 }
