@@ -370,7 +370,13 @@ static uint32_t nearest_in_cells(const grid *g, const sg_sites *ps, const sg_sam
  * one, but an octree's corners off the surface are such sites, and a
  * linear scan per corner took 64% of an ISO bake's time, measured). Its
  * answer is the linear scan's: the smallest squared distance, ties to the
- * lower sample index (knn.h). NULL when out of memory. */
+ * lower sample index (knn.h). Built by the first thread that needs it, so
+ * a bake whose sites are all covered (MLS, disks) never builds one. */
+typedef struct lazy_tree {
+    sg_knn *tree;
+    int failed; /* out of memory building it */
+} lazy_tree;
+
 static sg_knn *samples_tree(const sg_sites *ps, const sg_sample_set *set)
 {
     float *xyz = sg_alloc_array(3 * set->count, sizeof *xyz);
@@ -387,11 +393,25 @@ static sg_knn *samples_tree(const sg_sites *ps, const sg_sample_set *set)
     return st == SG_OK ? t : NULL;
 }
 
-static uint32_t nearest_anywhere(const sg_knn *tree, const sg_sites *ps, size_t i)
+/* The nearest sample of all to site i; NONE (and lt->failed) when the
+ * tree cannot be built. Called inside a parallel loop: the critical section
+ * builds the tree once and publishes it to every thread that passes it. */
+static uint32_t nearest_anywhere(lazy_tree *lt, const sg_sites *ps, const sg_sample_set *set, size_t i)
 {
-    uint32_t j = 0;
+    sg_knn *tree;
+#pragma omp critical(sg_samples_lazy_tree)
+    {
+        if (!lt->tree && !lt->failed) {
+            lt->tree = samples_tree(ps, set);
+            lt->failed = !lt->tree;
+        }
+        tree = lt->tree;
+    }
+    uint32_t j = NONE;
     float d2;
-    return sg_knn_query(tree, sg_sites_position(ps, i), 1, SG_KNN_NONE, &j, &d2) ? j : 0;
+    if (!tree || !sg_knn_query(tree, sg_sites_position(ps, i), 1, SG_KNN_NONE, &j, &d2))
+        return NONE;
+    return j;
 }
 
 sg_status sg_samples_interpolate(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
@@ -415,11 +435,7 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
     grid g;
     if (!grid_of_samples(&g, ps, set, support * s0))
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the interpolation grid");
-    sg_knn *tree = samples_tree(ps, set);
-    if (!tree) {
-        grid_free(&g);
-        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the samples' kd-tree");
-    }
+    lazy_tree lt = {0};
     int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
     for (size_t i = 0; i < ps->count; ++i) {
@@ -489,12 +505,15 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
         } else {
             uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
             if (j == NONE)
-                j = nearest_anywhere(tree, ps, i);
-            memcpy(out + nc * i, values + nc * (size_t)j, nc * sizeof *out);
+                j = nearest_anywhere(&lt, ps, set, i);
+            if (j != NONE) /* else out of memory, reported below */
+                memcpy(out + nc * i, values + nc * (size_t)j, nc * sizeof *out);
         }
     }
-    sg_knn_destroy(tree);
+    sg_knn_destroy(lt.tree);
     grid_free(&g);
+    if (lt.failed)
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the samples' kd-tree");
     return SG_OK;
 }
 
@@ -506,18 +525,16 @@ sg_status sg_samples_nearest(const sg_sites *ps, const sg_sample_set *set, float
     grid g;
     if (!grid_of_samples(&g, ps, set, 2.0f * s0))
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the nearest-sample grid");
-    sg_knn *tree = samples_tree(ps, set);
-    if (!tree) {
-        grid_free(&g);
-        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the samples' kd-tree");
-    }
+    lazy_tree lt = {0};
     int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
     for (size_t i = 0; i < ps->count; ++i) {
         uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
-        out[i] = j != NONE ? j : nearest_anywhere(tree, ps, i);
+        out[i] = j != NONE ? j : nearest_anywhere(&lt, ps, set, i);
     }
-    sg_knn_destroy(tree);
+    sg_knn_destroy(lt.tree);
     grid_free(&g);
+    if (lt.failed)
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the samples' kd-tree");
     return SG_OK;
 }
