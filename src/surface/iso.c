@@ -530,6 +530,20 @@ static void ray_state_init(ray_state *rs, const sg_ray *ray)
     rs->either = rs->want_front && rs->want_back;
 }
 
+/* One ray's counters into stats (may be NULL); for the ISO, isects are
+ * the leaves whose cubic was examined and splats the roots solved (iso.h). */
+static void count_ray(sg_ray_stats *stats, const ray_state *rs, uint64_t nodes, uint64_t leaves, int found)
+{
+    if (!stats)
+        return;
+    stats->rays++;
+    stats->nodes += nodes;
+    stats->leaves += leaves;
+    stats->isects += rs->isects;
+    stats->splats += rs->roots;
+    stats->hits += (uint64_t)found;
+}
+
 /* Front-to-back traversal; the first accepted crossing (see file note). */
 static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
 {
@@ -583,14 +597,7 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
 out:
     if (!found)
         hit->splat = SG_INVALID_ID;
-    if (stats) {
-        stats->rays++;
-        stats->nodes += nodes;
-        stats->leaves += leaves;
-        stats->isects += rs.isects;
-        stats->splats += rs.roots;
-        stats->hits += (uint64_t)found;
-    }
+    count_ray(stats, &rs, nodes, leaves, found);
     return found;
 }
 
@@ -686,14 +693,7 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             continue;
         if (!(found >> r & 1u))
             hits[r].splat = SG_INVALID_ID;
-        if (stats) {
-            stats->rays++;
-            stats->nodes += nodes[r];
-            stats->leaves += leaves[r];
-            stats->isects += rs[r].isects;
-            stats->splats += rs[r].roots;
-            stats->hits += found >> r & 1u;
-        }
+        count_ray(stats, &rs[r], nodes[r], leaves[r], (int)(found >> r & 1u));
     }
     return found;
 }
