@@ -83,7 +83,7 @@ typedef struct sg_verify_desc {
     size_t sizes[SG_VERIFY_MAX_SIZES]; /* SCALING point counts; n_sizes 0 =
                                 default 2k,8k,32k,128k,512k,1M (ci 2k,8k) */
     int n_sizes;
-    double case_timeout_s;   /* per stability child; default 300 (ci 120)  */
+    double case_timeout_s;   /* per stability child; default 300 (ci 60)   */
     const char *only_case;   /* STABILITY: just this case; NULL = all      */
     FILE *log;               /* progress lines; NULL = silent             */
 } sg_verify_desc;
