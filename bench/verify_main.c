@@ -22,7 +22,7 @@ static const char usage[] =
     "                     the process peaks at ~0.6 KB per point: 24M needs ~13 GiB;\n"
     "                     --ci: 2000,8000)\n"
     "  --case NAME        stability: only this case (see --list-cases)\n"
-    "  --timeout S        stability: seconds per case and model (default 300; --ci 120)\n"
+    "  --timeout S        stability: seconds per case and model (default 300; --ci 60)\n"
     "  --out-dir DIR      tables (default out/verify)\n"
     "  --diff-dir DIR     difference images (default OUT/diff)\n"
     "  --cache-dir DIR    converged references (default out/verify/cache)\n"
