@@ -606,6 +606,152 @@ out:
  * state, so it meets the same leaves in the same order with the same
  * intervals as alone and gets the same hit, bit for bit; a cell is
  * visited while any ray still looking for a hit crosses it. */
+#ifdef __AVX2__
+/* The rays are the four lanes of SSE vectors. Every interval is the
+ * single-ray expression lane by lane: half_intervals' min2(a, b) is
+ * _mm_min_ps(b, a) and max2(a, b) is _mm_max_ps(b, a) (both return their
+ * second operand unless the first is strictly smaller / larger), and the
+ * children's clipping is children_crossed's AVX expression with the
+ * operands in its order. */
+typedef struct packet_entry {
+    __m128 t0, t1;
+    uint32_t index, x, y, z;
+    uint8_t level, kind, active; /* kind: CELL_*; active: rays crossing it */
+} packet_entry;
+
+/* The per-axis constants of four rays, lane r = rays[r]. */
+typedef struct packet_geom {
+    __m128 od[3], inv[3];
+    __m128 par[3];  /* all ones where ray r is parallel to axis a's planes */
+    int any_par[3];
+} packet_geom;
+
+/* half_intervals for the four lanes at once. */
+static inline void packet_half_intervals(const packet_geom *pg, const float p[3][3], __m128 ilo[3][2], __m128 ihi[3][2])
+{
+    const __m128 pinf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+    for (int a = 0; a < 3; ++a) {
+        __m128 o = pg->od[a], inv = pg->inv[a];
+        __m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][0]), o), inv);
+        __m128 pm = _mm_set1_ps(p[a][1]);
+        __m128 tm = _mm_mul_ps(_mm_sub_ps(pm, o), inv);
+        __m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][2]), o), inv);
+        ilo[a][0] = _mm_min_ps(tm, ta);
+        ihi[a][0] = _mm_max_ps(tm, ta);
+        ilo[a][1] = _mm_min_ps(tb, tm);
+        ihi[a][1] = _mm_max_ps(tb, tm);
+        if (pg->any_par[a]) {
+            __m128 below = _mm_cmple_ps(o, pm), above = _mm_cmpge_ps(o, pm), par = pg->par[a];
+            ilo[a][0] = _mm_blendv_ps(ilo[a][0], _mm_blendv_ps(pinf, ninf, below), par);
+            ihi[a][0] = _mm_blendv_ps(ihi[a][0], _mm_blendv_ps(ninf, pinf, below), par);
+            ilo[a][1] = _mm_blendv_ps(ilo[a][1], _mm_blendv_ps(pinf, ninf, above), par);
+            ihi[a][1] = _mm_blendv_ps(ihi[a][1], _mm_blendv_ps(ninf, pinf, above), par);
+        }
+    }
+}
+
+static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
+{
+    ray_state rs[4];
+    ray_geom g[4];
+    float r0[4] = {0}, r1[4] = {0};
+    unsigned active = 0, found = 0, either = 0;
+    uint64_t nodes[4] = {0}, leaves[4] = {0};
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        ray_state_init(&rs[r], &rays[r]);
+        if (rs[r].either)
+            either |= 1u << r;
+        if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
+            active |= 1u << r;
+    }
+    packet_geom pg;
+    for (int a = 0; a < 3; ++a) {
+        float od[4] = {0}, inv[4] = {0}, par[4] = {0};
+        for (int r = 0; r < 4; ++r) {
+            if (!(active >> r & 1u))
+                continue;
+            od[r] = g[r].od[a];
+            inv[r] = g[r].inv[a];
+            par[r] = g[r].par[a] ? -1.0f : 0.0f; /* the sign bit is blendv's mask */
+        }
+        pg.od[a] = _mm_loadu_ps(od);
+        pg.inv[a] = _mm_loadu_ps(inv);
+        pg.par[a] = _mm_loadu_ps(par);
+        pg.any_par[a] = _mm_movemask_ps(pg.par[a]) != 0;
+    }
+    unsigned octant = active ? g[__builtin_ctz(active)].octant : 0u;
+    packet_entry st[STACK_MAX];
+    int sp = 0;
+    if (active)
+        st[sp++] = (packet_entry){_mm_loadu_ps(r0), _mm_loadu_ps(r1), 0, 0, 0, 0, 0, CELL_NODE, (uint8_t)active};
+    while (sp > 0) {
+        const packet_entry *e = &st[--sp];
+        unsigned act = e->active & ~found;
+        if (!act)
+            continue;
+        for (unsigned m = act; m; m &= m - 1)
+            nodes[__builtin_ctz(m)]++;
+        if (e->kind == CELL_POSITIVE) {
+            for (unsigned m = act; m; m &= m - 1) {
+                rs[__builtin_ctz(m)].outside = 1;
+                rs[__builtin_ctz(m)].carry = 0;
+            }
+            continue;
+        }
+        uint32_t size = 1u << (iso->max_depth - e->level);
+        if (e->kind == CELL_LEAF) {
+            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+            float t0[4], t1[4];
+            _mm_storeu_ps(t0, e->t0);
+            _mm_storeu_ps(t1, e->t1);
+            for (unsigned m = act; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                leaves[r]++;
+                if (leaf_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                    found |= 1u << r;
+            }
+            continue;
+        }
+        const iso_node *N = &iso->nodes[e->index];
+        uint32_t base[3] = {e->x, e->y, e->z};
+        uint8_t level = e->level;
+        __m128 T0 = e->t0, T1 = e->t1;
+        float p[3][3];
+        cell_planes(iso, base, size, p);
+        __m128 ilo[3][2], ihi[3][2];
+        packet_half_intervals(&pg, p, ilo, ihi);
+        /* positive cells matter only to rays accepting either face */
+        unsigned pos_rays = act & either;
+        /* children front to back is j = 0..7 with k = j ^ octant: push the
+         * farthest first; e (a stack slot) is overwritten from here on */
+        for (int j = 7; j >= 0; --j) {
+            unsigned k = (unsigned)j ^ octant;
+            unsigned exists = N->child_mask >> k & 1u, pos = N->pos_mask >> k & 1u;
+            unsigned lanes = exists ? act : pos ? pos_rays : 0u;
+            if (!lanes)
+                continue;
+            __m128 c0 = _mm_max_ps(_mm_max_ps(T0, ilo[0][k & 1]), _mm_max_ps(ilo[1][k >> 1 & 1], ilo[2][k >> 2]));
+            __m128 c1 = _mm_min_ps(_mm_min_ps(T1, ihi[0][k & 1]), _mm_min_ps(ihi[1][k >> 1 & 1], ihi[2][k >> 2]));
+            lanes &= (unsigned)_mm_movemask_ps(_mm_cmple_ps(c0, c1));
+            if (!lanes)
+                continue;
+            stack_entry ce = child_entry(N, base, size, level, k);
+            assert(sp < STACK_MAX);
+            st[sp++] = (packet_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, ce.level, ce.is_leaf, (uint8_t)lanes};
+        }
+    }
+    for (int r = 0; r < 4; ++r) {
+        if (!(mask >> r & 1u))
+            continue;
+        if (!(found >> r & 1u))
+            hits[r].splat = SG_INVALID_ID;
+        count_ray(stats, &rs[r], nodes[r], leaves[r], (int)(found >> r & 1u));
+    }
+    return found;
+}
+#else
 typedef struct packet_entry {
     uint32_t index, x, y, z;
     float t0[4], t1[4];
@@ -697,6 +843,8 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     }
     return found;
 }
+
+#endif
 
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats)
