@@ -46,6 +46,8 @@ static const char usage[] =
     "  --tolerance F    ISO tolerance (default 0.05)\n"
     "  --leaf-radii F   ISO leaf_radii (default 2)\n"
     "  --iso-only       no MLS scene: only the ISO's build and casts\n"
+    "  --lod LIST       level-of-detail thresholds (pixels) to time against full\n"
+    "                   detail, comma-separated (default 0.5,1,2,4; none: \"\")\n"
     "  --csv PATH       append rows (default out/bench_iso/bench_iso.csv)\n"
     "The ISO casts twice per view: one ray at a time (sg_iso_intersect) and as\n"
     "2x2 quads of pixels (sg_iso_intersect4, the viewer's path); both give the\n"
@@ -123,6 +125,59 @@ static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam
     return best;
 }
 
+/* Level of detail against full detail (the quads' frame with lod 0: hit
+ * flags h0, distances t0), one line per threshold of list: CPU s per frame,
+ * node steps and leaves per ray, pixels whose hit-or-miss differs, and
+ * the mean and largest |dt| / t of common hits (the hit moves by at most
+ * sqrt(3) cell edges, a cell below lod footprints: |dt| / t <= sqrt(3) x
+ * lod x the pixel angle). The ISO is left at its default threshold. */
+static void lod_sweep(sg_iso *iso, const sg_camera *cam, int size, int threads, int frames, const char *list,
+                      double cpu0, sg_ray_stats st0, const uint8_t *h0, const float *t0)
+{
+    if (!list || !*list)
+        return;
+    int n = size * size;
+    uint8_t *h = malloc((size_t)n);
+    float *t = malloc((size_t)n * sizeof *t);
+    if (!h || !t) {
+        free(h);
+        free(t);
+        return;
+    }
+    double r0 = st0.rays ? (double)st0.rays : 1.0;
+    printf("  level of detail (2x2 quads; lod 0 = full detail):\n");
+    printf("  %8s %10s %8s %10s %10s %10s %12s %12s\n", "lod px", "CPU s", "speedup", "nodes/ray",
+           "leaves/ray", "hit/miss", "mean dt/t", "max dt/t");
+    printf("  %8s %10.4f %8.2f %10.2f %10.3f %10s %12s %12s\n", "0", cpu0, 1.0, (double)st0.nodes / r0,
+           (double)st0.leaves / r0, "-", "-", "-");
+    for (const char *c = list; *c;) {
+        char *end;
+        float lod = strtof(c, &end);
+        if (end == c || !(lod >= 0.0f))
+            break;
+        sg_iso_set_lod(iso, lod);
+        frame fl = cast(NULL, iso, cam, size, threads, frames, 1, h, t, NULL);
+        int differ = 0, both = 0;
+        double sum = 0.0, worst = 0.0;
+        for (int i = 0; i < n; ++i) {
+            differ += h[i] != h0[i];
+            if (h[i] && h0[i]) {
+                double d = fabs((double)t[i] - (double)t0[i]) / (double)t0[i];
+                sum += d;
+                worst = d > worst ? d : worst;
+                both++;
+            }
+        }
+        double rl = fl.stats.rays ? (double)fl.stats.rays : 1.0;
+        printf("  %8g %10.4f %8.2f %10.2f %10.3f %10d %12.2e %12.2e\n", (double)lod, fl.cpu, cpu0 / fl.cpu,
+               (double)fl.stats.nodes / rl, (double)fl.stats.leaves / rl, differ, both ? sum / both : 0.0, worst);
+        c = *end == ',' ? end + 1 : end;
+    }
+    sg_iso_set_lod(iso, SG_ISO_LOD_DEFAULT);
+    free(h);
+    free(t);
+}
+
 /* FNV-1a over each pixel's hit flag and t bits. */
 static uint64_t hit_checksum(const uint8_t *hit, const float *t, int n)
 {
@@ -150,6 +205,7 @@ int main(int argc, char **argv)
     const char *mesh = DEFAULT_MESH, *csv = "out/bench_iso/bench_iso.csv";
     size_t points = 1000000;
     int size = 512, frames = 3, threads = 2, iso_only = 0;
+    const char *lod_list = "0.5,1,2,4";
     sg_iso_desc idesc = {0};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -175,6 +231,7 @@ int main(int argc, char **argv)
             else if (strcmp(a, "--tolerance") == 0) idesc.tolerance = strtof(v, NULL);
             else if (strcmp(a, "--leaf-radii") == 0) idesc.leaf_radii = strtof(v, NULL);
             else if (strcmp(a, "--csv") == 0) csv = v;
+            else if (strcmp(a, "--lod") == 0) lod_list = v;
             else return bench_fail("bench_iso", "unknown option %s\n%s", a, usage);
         }
     }
@@ -267,6 +324,9 @@ int main(int argc, char **argv)
         frame fi = cast(NULL, iso, &cams[v], size, threads, frames, 0, hb, tb, lb);
         frame fq = cast(NULL, iso, &cams[v], size, threads, frames, 1, hq, tq, NULL);
         uint64_t sum_single = hit_checksum(hb, tb, n), sum_quads = hit_checksum(hq, tq, n);
+        sg_iso_set_lod(iso, 0.0f);
+        frame f0 = cast(NULL, iso, &cams[v], size, threads, frames, 1, hq, tq, NULL);
+        sg_iso_set_lod(iso, SG_ISO_LOD_DEFAULT);
         int same = 0, both = 0;
         for (int i = 0; i < n; ++i) {
             same += ha[i] == hb[i];
@@ -291,6 +351,7 @@ int main(int argc, char **argv)
         printf("%-28s %14.1f %14.2f\n", "splats / roots per ray", (double)fm.stats.splats / rm,
                (double)fi.stats.splats / ri);
         printf("%-28s %14.4f   median |dt| / leaf edge %.4f (%d common hits)\n", "hit/miss agree", agree, med, both);
+        lod_sweep(iso, &cams[v], size, threads, frames, lod_list, f0.cpu, f0.stats, hq, tq);
         fprintf(f,
                 "\"%s\",\"%s\",%zu,%d,%s,%d,%.3f,%.3f,%.3f,%.3f,%zu,%zu,%zu,%zu,%zu,%.2f,%.2f,%d,%.3f,%.3f,%.4f,"
                 "%.4f,%.3f,%.5f,%.5f,%.2f,%.2f,%.3f,%.4f\n",

@@ -63,7 +63,14 @@ void sg_iso_destroy(sg_iso *iso)
     sg_free(iso->leaves);
     sg_free(iso->cf);
     sg_free(iso->cn);
+    sg_free(iso->lod);
     sg_free(iso);
+}
+
+void sg_iso_set_lod(sg_iso *iso, float lod_px)
+{
+    assert(iso && lod_px >= 0.0f && isfinite(lod_px));
+    iso->lod_px = lod_px;
 }
 
 void sg_iso_get_info(const sg_iso *iso, sg_iso_info *info)
@@ -192,6 +199,7 @@ uint64_t sg_iso_checksum(const sg_iso *iso)
     h = fnv(h, iso->leaves, iso->leaf_count * sizeof *iso->leaves);
     h = fnv(h, iso->cf, iso->corner_count * sizeof *iso->cf);
     h = fnv(h, iso->cn, iso->corner_count * sizeof *iso->cn);
+    h = fnv(h, iso->lod, iso->node_count * sizeof *iso->lod);
     return h;
 }
 
@@ -278,22 +286,33 @@ static int critical_points(const cubic *c, float out[2])
     return m;
 }
 
-/* Accepts or rejects a crossing at σ of the leaf; fills hit on accept. */
-static int accept(const sg_iso *iso, const iso_leaf *L, ray_state *rs, float t, sg_vec3 uvw, int entry, uint32_t leaf,
-                  sg_hit *hit)
+/* The patch a ray meets in a cell: the trilinear interpolation of v[8] at
+ * the corners of the cell's box (corner c at bit 0: +x, 1: +y, 2: +z). */
+typedef struct patch {
+    float v[8];
+    const iso_leaf *L; /* a leaf: its corner normals are interpolated; NULL: */
+    sg_vec3 n;         /* a coarse patch (iso_lod.c), of this normal          */
+    uint32_t leaf;     /* the leaf a hit names (a coarse patch: its leaf)     */
+} patch;
+
+/* Accepts or rejects a crossing at t (local coordinates uvw) of patch P;
+ * fills hit on accept. */
+static int accept(const sg_iso *iso, const patch *P, ray_state *rs, float t, sg_vec3 uvw, int entry, sg_hit *hit)
 {
     const sg_ray *ray = rs->ray;
     if (entry ? !rs->want_front : (!rs->want_back || (rs->either && rs->outside)))
         return 0;
     if (!(t >= ray->tmin && t <= ray->tmax))
         return 0;
-    /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
-    sg_vec3 n = sg_v3(0, 0, 0);
-    for (int k = 0; k < 8; ++k) {
-        float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
-        n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[L->corner[k]]), w);
+    sg_vec3 n = P->n;
+    if (P->L) { /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
+        n = sg_v3(0, 0, 0);
+        for (int k = 0; k < 8; ++k) {
+            float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
+            n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[P->L->corner[k]]), w);
+        }
+        n = sg_v3_normalize(n);
     }
-    n = sg_v3_normalize(n);
     float side = entry ? -1.0f : 1.0f;
     float dn = sg_v3_dot(ray->dir, n);
     if (!(dn * side > SIDE_COS)) /* invariant 2 */
@@ -303,19 +322,16 @@ static int accept(const sg_iso *iso, const iso_leaf *L, ray_state *rs, float t, 
     hit->t = t;
     hit->p = sg_v3_madd(ray->org, ray->dir, t);
     hit->n = n;
-    hit->splat = L->splat;
-    hit->leaf = leaf;
+    hit->splat = iso->leaves[P->leaf].splat;
+    hit->leaf = P->leaf;
     return 1;
 }
 
-/* The first accepted crossing in leaf `leaf` (box b) over [t0, t1]. */
-static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+/* The first accepted crossing of patch P (box b) over [t0, t1]. */
+static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
 {
-    const iso_leaf *L = &iso->leaves[leaf];
     const sg_ray *ray = rs->ray;
-    float v[8];
-    for (int k = 0; k < 8; ++k)
-        v[k] = (float)iso->cf[L->corner[k]] * iso->f_scale;
+    const float *v = P->v;
     float k1 = v[1] - v[0], k2 = v[2] - v[0], k3 = v[4] - v[0];
     float k4 = v[3] - v[1] - v[2] + v[0], k5 = v[6] - v[2] - v[4] + v[0], k6 = v[5] - v[1] - v[4] + v[0];
     float k7 = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
@@ -337,7 +353,7 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
         int was_pos = rs->carry_g > 0.0f, is_pos = c.a0 > 0.0f;
         if (was_pos != is_pos) {
             rs->roots++;
-            if (accept(iso, L, rs, t0, sg_v3(u, w, z), was_pos, leaf, hit))
+            if (accept(iso, P, rs, t0, sg_v3(u, w, z), was_pos, hit))
                 return 1;
         }
     }
@@ -358,7 +374,7 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
             float s = solve_piece(&c, pa, pb, ga, gb, entry);
             float t = t0 + s * S;
             sg_vec3 q = sg_v3(u + bu * s, w + bw * s, z + bz * s);
-            if (accept(iso, L, rs, t, q, entry, leaf, hit))
+            if (accept(iso, P, rs, t, q, entry, hit))
                 return 1;
         }
         if (rs->either && gb > 0.0f)
@@ -372,6 +388,50 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
     rs->carry = !crossed;
     rs->carry_t = t1;
     rs->carry_g = ga;
+    return 0;
+}
+
+/* The first accepted crossing in leaf `leaf` (box b) over [t0, t1]. */
+static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    patch P;
+    P.L = &iso->leaves[leaf];
+    P.leaf = leaf;
+    for (int k = 0; k < 8; ++k)
+        P.v[k] = (float)iso->cf[P.L->corner[k]] * iso->f_scale;
+    return patch_hit(iso, &P, b, t0, t1, rs, hit);
+}
+
+/* Whether a ray whose footprint is lod_w wide per unit distance takes the
+ * cell of `size` grid units that it enters at t0 as its node's coarse
+ * patch (iso.h, "Levels of detail"). */
+static inline int lod_takes(const sg_iso *iso, uint32_t node, uint32_t size, float lod_w, float t0)
+{
+    return lod_w > 0.0f && iso->lod[node].leaf != ISO_NO_LOD && (float)size * iso->unit <= lod_w * t0;
+}
+
+/* The first accepted crossing of node `node`'s coarse patch (box b) over
+ * [t0, t1]. Without one, the ray's state is left as it was (the ray then
+ * descends into the node as if it had not looked: no hole, no spurious
+ * jump at the next face); only its counters keep the work done. */
+static int lod_hit(const sg_iso *iso, uint32_t node, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    const iso_lod *D = &iso->lod[node];
+    patch P;
+    P.L = NULL;
+    P.n = sg_iso_decode_normal(D->n);
+    P.leaf = D->leaf;
+    for (int k = 0; k < 8; ++k) {
+        sg_vec3 c = sg_v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
+        P.v[k] = sg_v3_dot(P.n, c) - D->d;
+    }
+    ray_state before = *rs;
+    if (patch_hit(iso, &P, b, t0, t1, rs, hit))
+        return 1;
+    uint64_t isects = rs->isects, roots = rs->roots;
+    *rs = before;
+    rs->isects = isects;
+    rs->roots = roots;
     return 0;
 }
 
@@ -552,7 +612,7 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
     uint64_t nodes = 0, leaves = 0;
     int found = 0;
     ray_geom g;
-    float t0, t1;
+    float t0, t1, lod_w = iso->lod_px * ray->spread;
     if (!iso->node_count || !ray_enter(iso, ray, &g, &t0, &t1))
         goto out;
     stack_entry st[STACK_MAX];
@@ -574,6 +634,11 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
                 break;
             }
             continue;
+        }
+        if (lod_takes(iso, e.index, size, lod_w, e.t0) &&
+            lod_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
+            found = 1;
+            break;
         }
         const iso_node *N = &iso->nodes[e.index];
         uint32_t base[3] = {e.x, e.y, e.z};
@@ -657,10 +722,14 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     float r0[4] = {0}, r1[4] = {0};
     unsigned active = 0, found = 0, either = 0;
     uint64_t nodes[4] = {0}, leaves[4] = {0};
+    float lod_w[4] = {0};
+    int lod_any = 0;
     for (int r = 0; r < 4; ++r) {
         if (!(mask >> r & 1u))
             continue;
         ray_state_init(&rs[r], &rays[r]);
+        lod_w[r] = iso->lod_px * rays[r].spread;
+        lod_any |= lod_w[r] > 0.0f;
         if (rs[r].either)
             either |= 1u << r;
         if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
@@ -714,6 +783,21 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             }
             continue;
         }
+        if (lod_any && iso->lod[e->index].leaf != ISO_NO_LOD) {
+            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+            float t0[4], t1[4];
+            _mm_storeu_ps(t0, e->t0);
+            _mm_storeu_ps(t1, e->t1);
+            for (unsigned m = act; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                if (lod_takes(iso, e->index, size, lod_w[r], t0[r]) &&
+                    lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                    found |= 1u << r;
+            }
+            act &= ~found;
+            if (!act)
+                continue;
+        }
         const iso_node *N = &iso->nodes[e->index];
         uint32_t base[3] = {e->x, e->y, e->z};
         uint8_t level = e->level;
@@ -752,98 +836,17 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     return found;
 }
 #else
-typedef struct packet_entry {
-    uint32_t index, x, y, z;
-    float t0[4], t1[4];
-    uint8_t level, kind, active; /* kind: CELL_*; active: rays crossing it */
-} packet_entry;
-
+/* The portable build traces each ray alone (the same hits). */
 static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
 {
-    ray_state rs[4];
-    ray_geom g[4];
-    float r0[4] = {0}, r1[4] = {0};
-    unsigned active = 0, found = 0;
-    uint64_t nodes[4] = {0}, leaves[4] = {0};
-    for (int r = 0; r < 4; ++r) {
-        if (!(mask >> r & 1u))
-            continue;
-        ray_state_init(&rs[r], &rays[r]);
-        if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
-            active |= 1u << r;
-    }
-    unsigned octant = active ? g[__builtin_ctz(active)].octant : 0u;
-    packet_entry st[STACK_MAX];
-    int sp = 0;
-    if (active)
-        st[sp++] = (packet_entry){0, 0, 0, 0, {r0[0], r0[1], r0[2], r0[3]}, {r1[0], r1[1], r1[2], r1[3]}, 0,
-                                  CELL_NODE, (uint8_t)active};
-    while (sp > 0) {
-        packet_entry e = st[--sp];
-        unsigned act = e.active & ~found;
-        if (!act)
-            continue;
-        uint32_t size = 1u << (iso->max_depth - e.level);
-        for (unsigned m = act; m; m &= m - 1)
-            nodes[__builtin_ctz(m)]++;
-        if (e.kind == CELL_POSITIVE) {
-            for (unsigned m = act; m; m &= m - 1) {
-                rs[__builtin_ctz(m)].outside = 1;
-                rs[__builtin_ctz(m)].carry = 0;
-            }
-            continue;
-        }
-        if (e.kind == CELL_LEAF) {
-            sg_aabb box = cell_box(iso, e.x, e.y, e.z, size);
-            for (unsigned m = act; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                leaves[r]++;
-                if (leaf_hit(iso, e.index, box, e.t0[r], e.t1[r], &rs[r], &hits[r]))
-                    found |= 1u << r;
-            }
-            continue;
-        }
-        const iso_node *N = &iso->nodes[e.index];
-        uint32_t base[3] = {e.x, e.y, e.z};
-        float p[3][3];
-        cell_planes(iso, base, size, p);
-        float c0s[4][8], c1s[4][8];
-        unsigned visit[4] = {0}, any = 0;
-        for (unsigned m = act; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            float ilo[3][2], ihi[3][2];
-            half_intervals(&g[r], p, ilo, ihi);
-            visit[r] = (N->child_mask | (rs[r].either ? N->pos_mask : 0u)) &
-                       children_crossed(ilo, ihi, e.t0[r], e.t1[r], c0s[r], c1s[r]);
-            any |= visit[r];
-        }
-        for (unsigned m = xor_permute(any, octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
-            unsigned k = (31u - (unsigned)__builtin_clz(m)) ^ octant;
-            stack_entry ce = child_entry(N, base, size, e.level, k);
-            packet_entry pe = {ce.index, ce.x, ce.y, ce.z, {0}, {0}, ce.level, ce.is_leaf, 0};
-            for (unsigned q = act; q; q &= q - 1) {
-                int r = __builtin_ctz(q);
-                if (!(visit[r] >> k & 1u))
-                    continue;
-                /* a positive cell only for the rays that visit those */
-                pe.active |= (uint8_t)(1u << r);
-                pe.t0[r] = c0s[r][k];
-                pe.t1[r] = c1s[r][k];
-            }
-            assert(sp < STACK_MAX);
-            st[sp++] = pe;
-        }
-    }
-    for (int r = 0; r < 4; ++r) {
-        if (!(mask >> r & 1u))
-            continue;
-        if (!(found >> r & 1u))
-            hits[r].splat = SG_INVALID_ID;
-        count_ray(stats, &rs[r], nodes[r], leaves[r], (int)(found >> r & 1u));
+    unsigned found = 0;
+    for (unsigned m = mask; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (trace(iso, &rays[r], &hits[r], stats))
+            found |= 1u << r;
     }
     return found;
 }
-
 #endif
 
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],

@@ -12,6 +12,7 @@
  *   leaves[leaf_count]    stored leaves
  *   cf[corner_count]      corner f, int16, f = cf * f_scale
  *   cn[corner_count]      corner normal, oct-encoded 2 x int16 (x low half)
+ *   lod[node_count]       each inner node's coarse patch (iso_lod.c)
  * Child c of a cell (bit 0: +x half, bit 1: +y, bit 2: +z) exists iff bit c
  * of child_mask; it is a leaf iff bit c of leaf_mask too. The inner
  * children of a node are nodes[inner_base + k], the leaf children
@@ -44,6 +45,19 @@ typedef struct iso_leaf {
     uint32_t splat;     /* representative splat: nearest to the centre      */
 } iso_leaf;
 
+/* An inner node's coarse patch for level of detail (iso_lod.c): the plane
+ * dot(n, x) = d fitted to the surface in the node's cell, hit in place of
+ * the node's subtree by a ray whose footprint is wider than the cell; the
+ * hit reads its light and material from `leaf`, the stored leaf nearest
+ * the plane's centre. leaf = ISO_NO_LOD where no plane fits (iso_lod.c). */
+typedef struct iso_lod {
+    uint32_t n;    /* plane normal, oct-encoded (sg_iso_encode_normal)      */
+    float d;       /* plane offset                                         */
+    uint32_t leaf; /* the leaf an LOD hit reads, or ISO_NO_LOD             */
+} iso_lod;
+
+#define ISO_NO_LOD UINT32_MAX
+
 struct sg_iso {
     sg_vec3 lo;          /* root cube corner                                 */
     float edge;          /* root cube edge                                   */
@@ -55,9 +69,15 @@ struct sg_iso {
     iso_leaf *leaves;
     int16_t *cf;
     uint32_t *cn;
+    iso_lod *lod;
+    float lod_px;        /* level-of-detail threshold in pixels; 0: off      */
     sg_iso_info info;    /* filled at the end of the build                   */
 };
 
 static inline float iso_coord(float lo, float unit, uint32_t i) { return lo + (float)i * unit; }
+
+/* Fits every inner node's coarse patch (iso->lod) once the octree is laid
+ * out. Errors: SG_ERR_NOMEM. */
+sg_status iso_lod_build(sg_iso *iso, sg_error *err);
 
 #endif
