@@ -31,6 +31,7 @@
 #include "surface/iso.h"
 
 #include <assert.h>
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -402,6 +403,34 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
     return patch_hit(iso, &P, b, t0, t1, rs, hit);
 }
 
+/* Whether ray state rs may skip node `node` (cell interval [t0, t1],
+ * normal n decoded from D) without meeting any leaf of it: its path
+ * through the cell stays off the slab holding every leaf below
+ * (iso_int.h), by more than the float rounding of n . x (a few ulps of
+ * |n . o| + t1). Positive cells there would tell a ray accepting either
+ * face that it is outside (iso_int.h pos_mask); one that does not know it
+ * yet skips only a node whose leaves form one sheet (their normals agree:
+ * a coarse patch exists) that it passes on the side its normal faces —
+ * outside, so it now knows — and otherwise descends. */
+static inline int slab_skips(const iso_lod *D, sg_vec3 n, ray_state *rs, float t0, float t1)
+{
+    const sg_ray *ray = rs->ray;
+    float s0 = sg_v3_dot(n, ray->org), sd = sg_v3_dot(n, ray->dir);
+    float a = s0 + sd * t0, b = s0 + sd * t1;
+    float m = 8.0f * FLT_EPSILON * (fabsf(n.x * ray->org.x) + fabsf(n.y * ray->org.y) + fabsf(n.z * ray->org.z) + t1);
+    int above = min2(a, b) > D->s_hi + m, below = max2(a, b) < D->s_lo - m;
+    if (!above && !below)
+        return 0;
+    if (!rs->either || rs->outside)
+        return 1;
+    if (above && D->leaf != ISO_NO_LOD) {
+        rs->outside = 1;
+        rs->carry = 0;
+        return 1;
+    }
+    return 0;
+}
+
 /* Whether a ray whose footprint is lod_w wide per unit distance takes the
  * cell of `size` grid units that it enters at t0 as its node's coarse
  * patch (iso.h, "Levels of detail"). */
@@ -635,6 +664,8 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             }
             continue;
         }
+        if (slab_skips(&iso->lod[e.index], sg_iso_decode_normal(iso->lod[e.index].n), &rs, e.t0, e.t1))
+            continue;
         if (lod_takes(iso, e.index, size, lod_w, e.t0) &&
             lod_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
             found = 1;
@@ -783,11 +814,20 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             }
             continue;
         }
-        if (lod_any && iso->lod[e->index].leaf != ISO_NO_LOD) {
+        const iso_lod *D = &iso->lod[e->index];
+        float t0[4], t1[4];
+        _mm_storeu_ps(t0, e->t0);
+        _mm_storeu_ps(t1, e->t1);
+        sg_vec3 dn = sg_iso_decode_normal(D->n);
+        for (unsigned m = act; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (slab_skips(D, dn, &rs[r], t0[r], t1[r]))
+                act &= ~(1u << r);
+        }
+        if (!act)
+            continue;
+        if (lod_any && D->leaf != ISO_NO_LOD) {
             sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
-            float t0[4], t1[4];
-            _mm_storeu_ps(t0, e->t0);
-            _mm_storeu_ps(t1, e->t1);
             for (unsigned m = act; m; m &= m - 1) {
                 int r = __builtin_ctz(m);
                 if (lod_takes(iso, e->index, size, lod_w[r], t0[r]) &&

@@ -47,6 +47,11 @@
  *    the ray is a cubic in t, split at its critical points into monotone
  *    pieces, and the first accepted sign change is solved by safeguarded
  *    Newton/bisection to |Δσ| <= SG_ISO_ROOT_EPS of the leaf's ray span.
+ *    Every inner node also bounds its leaves by a slab along their mean
+ *    normal (iso_lod.c); a ray whose path through the node's cell stays
+ *    off the slab skips the node (a grazing ray over a ground: half the
+ *    node steps), with the rule of iso.c slab_skips for rays accepting
+ *    either face.
  *
  *  - Levels of detail (iso_lod.c): every inner node also holds a coarse
  *    patch, the plane fitted to the surface of its leaves (stored where
@@ -82,7 +87,8 @@
  *    nearest the leaf centre): 36 bytes.
  *  - inner node: child mask, leaf-child mask, first inner child, first
  *    leaf child (children stored contiguously): 12 bytes; its coarse
- *    patch (oct-encoded normal, offset, representative leaf): 12 bytes.
+ *    patch and slab (oct-encoded normal, plane offset, slab bounds,
+ *    representative leaf): 20 bytes.
  *
  * Use:
  *     sg_iso_desc d = { .tolerance = 0.05f };     zero = defaults

@@ -45,15 +45,20 @@ typedef struct iso_leaf {
     uint32_t splat;     /* representative splat: nearest to the centre      */
 } iso_leaf;
 
-/* An inner node's coarse patch for level of detail (iso_lod.c): the plane
- * dot(n, x) = d fitted to the surface in the node's cell, hit in place of
- * the node's subtree by a ray whose footprint is wider than the cell; the
- * hit reads its light and material from `leaf`, the stored leaf nearest
- * the plane's centre. leaf = ISO_NO_LOD where no plane fits (iso_lod.c). */
+/* An inner node's coarse patch for level of detail and its surface slab
+ * (iso_lod.c). The plane dot(n, x) = d, fitted to the surface in the
+ * node's cell, is hit in place of the node's subtree by a ray whose
+ * footprint is wider than the cell; the hit reads its light and material
+ * from `leaf`, the stored leaf nearest the plane's centre; leaf =
+ * ISO_NO_LOD where no plane fits. Every stored leaf below the node lies
+ * in the slab s_lo <= dot(n, x) <= s_hi (boxes, not only their patches),
+ * so a ray whose path through the cell stays off the slab meets no leaf
+ * there (iso.c skips the node). */
 typedef struct iso_lod {
-    uint32_t n;    /* plane normal, oct-encoded (sg_iso_encode_normal)      */
-    float d;       /* plane offset                                         */
-    uint32_t leaf; /* the leaf an LOD hit reads, or ISO_NO_LOD             */
+    uint32_t n;          /* normal, oct-encoded (sg_iso_encode_normal)      */
+    float d;             /* plane offset                                    */
+    float s_lo, s_hi;    /* the slab of the leaves below (empty: lo > hi)   */
+    uint32_t leaf;       /* the leaf an LOD hit reads, or ISO_NO_LOD        */
 } iso_lod;
 
 #define ISO_NO_LOD UINT32_MAX

@@ -22,8 +22,13 @@
  * own), so an LOD hit reads baked light from a leaf of the same patch of
  * surface within the cell, as a full-detail ray through that pixel would.
  *
- * Deterministic: one sequential walk in the laid-out order (the same
- * arrays for any build thread count).
+ * The same normal bounds the node's surface slab: the extent along it of
+ * every stored leaf box below (a second walk, each node over its whole
+ * subtree: leaves x depth box projections), which lets a ray skip a node
+ * whose path stays off it.
+ *
+ * Deterministic: sequential walks in the laid-out order (the same arrays
+ * for any build thread count).
  */
 #include <assert.h>
 #include <math.h>
@@ -101,19 +106,25 @@ static void leaf_point(const sg_iso *iso, uint32_t leaf, const double lo[3], dou
     }
 }
 
-/* Decides node q's plane from its subtree's sums. */
+/* Node q's plane from its subtree's sums: always the normal (the slab's
+ * direction) and the plane through the centroid; the representative leaf
+ * (the coarse patch usable) only where the plane stands for the surface. */
 static void fit(sg_iso *iso, uint32_t q, const lod_sum *s, double edge)
 {
     iso_lod *out = &iso->lod[q];
-    *out = (iso_lod){0, 0.0f, ISO_NO_LOD};
-    if (!(s->w > 0.0))
-        return;
     double nl = sqrt(s->n[0] * s->n[0] + s->n[1] * s->n[1] + s->n[2] * s->n[2]);
-    if (!(nl >= LOD_NORMAL_AGREE * s->w))
-        return;
-    double n[3] = {s->n[0] / nl, s->n[1] / nl, s->n[2] / nl};
-    /* variance along n: n^T (E[p p^T] - c c^T) n */
+    double n[3] = {0.0, 0.0, 1.0}; /* no surface below, or normals that cancel: any direction bounds */
+    if (nl > 0.0)
+        n[0] = s->n[0] / nl, n[1] = s->n[1] / nl, n[2] = s->n[2] / nl;
+    uint32_t code = sg_iso_encode_normal(sg_v3((float)n[0], (float)n[1], (float)n[2]));
+    sg_vec3 qn = sg_iso_decode_normal(code); /* the stored normal decides the offset */
     const double *c = s->c;
+    double d = (double)qn.x * ((double)iso->lo.x + c[0]) + (double)qn.y * ((double)iso->lo.y + c[1]) +
+               (double)qn.z * ((double)iso->lo.z + c[2]);
+    *out = (iso_lod){code, (float)d, INFINITY, -INFINITY, ISO_NO_LOD};
+    if (!(s->w > 0.0) || !(nl >= LOD_NORMAL_AGREE * s->w))
+        return;
+    /* variance along n: n^T (E[p p^T] - c c^T) n */
     double C[6];
     C[0] = s->pp[0] / s->w - c[0] * c[0];
     C[1] = s->pp[1] / s->w - c[1] * c[1];
@@ -123,14 +134,58 @@ static void fit(sg_iso *iso, uint32_t q, const lod_sum *s, double edge)
     C[5] = s->pp[5] / s->w - c[1] * c[2];
     double var = n[0] * n[0] * C[0] + n[1] * n[1] * C[1] + n[2] * n[2] * C[2] +
                  2.0 * (n[0] * n[1] * C[3] + n[0] * n[2] * C[4] + n[1] * n[2] * C[5]);
-    if (!(var <= LOD_FLATNESS * LOD_FLATNESS * edge * edge))
-        return;
-    /* the stored (quantised) normal decides the plane's offset */
-    uint32_t code = sg_iso_encode_normal(sg_v3((float)n[0], (float)n[1], (float)n[2]));
-    sg_vec3 qn = sg_iso_decode_normal(code);
-    double d = (double)qn.x * ((double)iso->lo.x + c[0]) + (double)qn.y * ((double)iso->lo.y + c[1]) +
-               (double)qn.z * ((double)iso->lo.z + c[2]);
-    *out = (iso_lod){code, (float)d, s->rep};
+    if (var <= LOD_FLATNESS * LOD_FLATNESS * edge * edge)
+        out->leaf = s->rep;
+}
+
+/* The extent along n of every stored leaf box below node q (cell at x, y,
+ * z of `size` grid units), grown into [*lo, *hi]. */
+static void slab_rec(const sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint32_t z, uint32_t size,
+                     const double n[3], double *lo, double *hi)
+{
+    const iso_node *N = &iso->nodes[q];
+    uint32_t hs = size >> 1;
+    unsigned inner = 0;
+    const double o[3] = {iso->lo.x, iso->lo.y, iso->lo.z}, unit = (double)iso->unit;
+    for (unsigned k = 0; k < 8; ++k) {
+        if (!(N->child_mask >> k & 1u))
+            continue;
+        uint32_t c[3] = {x + (k & 1 ? hs : 0), y + (k & 2 ? hs : 0), z + (k & 4 ? hs : 0)};
+        if (!(N->leaf_mask >> k & 1u)) {
+            slab_rec(iso, N->inner_base + inner++, c[0], c[1], c[2], hs, n, lo, hi);
+            continue;
+        }
+        double a = 0.0, b = 0.0;
+        for (int ax = 0; ax < 3; ++ax) {
+            double p0 = o[ax] + c[ax] * unit, p1 = o[ax] + (c[ax] + hs) * unit;
+            a += n[ax] * (n[ax] > 0.0 ? p0 : p1);
+            b += n[ax] * (n[ax] > 0.0 ? p1 : p0);
+        }
+        *lo = a < *lo ? a : *lo;
+        *hi = b > *hi ? b : *hi;
+    }
+}
+
+/* Every node's slab, top-down (each from its whole subtree). */
+static void slabs(sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint32_t z, uint32_t size)
+{
+    iso_lod *D = &iso->lod[q];
+    sg_vec3 f = sg_iso_decode_normal(D->n);
+    double n[3] = {f.x, f.y, f.z}, lo = INFINITY, hi = -INFINITY;
+    slab_rec(iso, q, x, y, z, size, n, &lo, &hi);
+    /* rounded outward, and by the float rounding of a query's dot product
+     * (iso.c slab_misses) */
+    if (lo <= hi) {
+        D->s_lo = nextafterf((float)lo, -INFINITY);
+        D->s_hi = nextafterf((float)hi, INFINITY);
+    }
+    const iso_node *N = &iso->nodes[q];
+    uint32_t hs = size >> 1;
+    unsigned inner = 0;
+    for (unsigned k = 0; k < 8; ++k)
+        if ((N->child_mask >> k & 1u) && !(N->leaf_mask >> k & 1u))
+            slabs(iso, N->inner_base + inner++, x + (k & 1 ? hs : 0), y + (k & 2 ? hs : 0), z + (k & 4 ? hs : 0),
+                  hs);
 }
 
 /* Post-order walk: the sums of node q (cell at x, y, z of `size` grid
@@ -184,7 +239,9 @@ sg_status iso_lod_build(sg_iso *iso, sg_error *err)
     iso->lod = sg_alloc_array(iso->node_count ? iso->node_count : 1, sizeof *iso->lod);
     if (!iso->lod)
         return sg_error_set(err, SG_ERR_NOMEM, "iso: out of memory for %zu coarse patches", iso->node_count);
-    if (iso->node_count)
+    if (iso->node_count) {
         walk(iso, 0, 0, 0, 0, 1u << iso->max_depth);
+        slabs(iso, 0, 0, 0, 0, 1u << iso->max_depth);
+    }
     return SG_OK;
 }

@@ -152,6 +152,58 @@ static void test_iso_plane_exact(void **state)
     sg_pointset_free(&ps);
 }
 
+/* 2b. Grazing rays over a plane accepting either face, from above and
+ * from below (a ground seen from far off, a camera under it): every ray
+ * aimed at the plane's interior hits it, to test 2's tolerance. They run
+ * over many cells holding the plane without crossing it there, which the
+ * traversal skips by the slab of the leaves below each node (iso_int.h);
+ * a skip must never lose the crossing, and a ray from below (inside the
+ * field's negative side, no positive cell seen) must still take the back
+ * face. */
+static void test_iso_plane_grazing_either_face(void **state)
+{
+    (void)state;
+    sg_plane_points_desc pd = {.side = 200, .half = 2.0f, .centre = sg_v3(0, 0.25f, 0)};
+    sg_pointset ps = {0};
+    assert_int_equal(sg_points_make_plane(&pd, &ps, NULL), SG_OK);
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    float tol = 0.5f * info.f_scale + 1e-5f;
+    uint64_t rng = 11;
+    int misses[2] = {0, 0}, wrong_side = 0;
+    float worst = 0;
+    sg_ray_stats st = {0};
+    for (int i = 0; i < 4000; ++i) {
+        int from_below = i & 1;
+        float lim = 2.0f - 3.0f * r;
+        sg_vec3 target = sg_v3(lim * (2 * sg_test_rand01(&rng) - 1), 0.25f, lim * (2 * sg_test_rand01(&rng) - 1));
+        float elev = (3.0f + 17.0f * sg_test_rand01(&rng)) * PI / 180.0f, az = 2.0f * PI * sg_test_rand01(&rng);
+        sg_vec3 dir = sg_v3(cosf(elev) * cosf(az), from_below ? sinf(elev) : -sinf(elev), cosf(elev) * sinf(az));
+        sg_vec3 from = sg_v3_madd(target, dir, -3.0f);
+        sg_ray ray = make_ray(from, dir, SG_RAY_ANY_FACE);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, &st)) {
+            ++misses[from_below];
+            continue;
+        }
+        worst = fmaxf(worst, fabsf(hit.p.y - 0.25f));
+        /* from above the front face (n . dir < 0), from below the back
+         * face (the normal keeps the model's side: n . dir > 0) */
+        float nd = sg_v3_dot(hit.n, dir);
+        wrong_side += from_below ? !(nd > 0.0f) : !(nd < 0.0f);
+    }
+    printf("grazing: %.1f node steps per ray, misses above %d below %d, worst |y - y0| %g (tol %g)\n",
+           (double)st.nodes / (double)st.rays, misses[0], misses[1], (double)worst, (double)tol);
+    if (misses[0] || misses[1] || worst > tol || wrong_side)
+        fail_msg("grazing plane: misses from above %d, from below %d; worst |y - y0| %g (tol %g); %d hits on "
+                 "the wrong face",
+                 misses[0], misses[1], (double)worst, (double)tol, wrong_side);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
 /* Camera rays: a pinhole at `eye` looking at `look`, n x n pixels over a
  * 40-degree field. */
 static sg_ray camera_ray(sg_vec3 eye, sg_vec3 look, int n, int x, int y)
@@ -761,6 +813,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_iso_sphere_accuracy),
         cmocka_unit_test(test_iso_plane_exact),
+        cmocka_unit_test(test_iso_plane_grazing_either_face),
         cmocka_unit_test(test_iso_agrees_with_mls_sphere),
         cmocka_unit_test(test_iso_agrees_with_mls_bumpy),
         cmocka_unit_test(test_iso_agrees_with_mls_bunny),
