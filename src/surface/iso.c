@@ -291,6 +291,7 @@ static int critical_points(const cubic *c, float out[2])
  * the corners of the cell's box (corner c at bit 0: +x, 1: +y, 2: +z). */
 typedef struct patch {
     float v[8];
+    float k[8];        /* v in the monomial basis (patch_coeffs): k[0] = v[0] */
     const iso_leaf *L; /* a leaf: its corner normals are interpolated; NULL: */
     sg_vec3 n;         /* a coarse patch (iso_lod.c), of this normal          */
     uint32_t leaf;     /* the leaf a hit names (a coarse patch: its leaf)     */
@@ -328,14 +329,25 @@ static int accept(const sg_iso *iso, const patch *P, ray_state *rs, float t, sg_
     return 1;
 }
 
-/* The first accepted crossing of patch P (box b) over [t0, t1]. */
+/* The patch as k0 + k1 u + k2 w + k3 z + k4 u w + k5 w z + k6 u z + k7 u w z
+ * over local coordinates (u, w, z) in [0,1]^3; once per patch, whatever
+ * number of rays meets it. */
+static void patch_coeffs(patch *P)
+{
+    const float *v = P->v;
+    P->k[0] = v[0];
+    P->k[1] = v[1] - v[0], P->k[2] = v[2] - v[0], P->k[3] = v[4] - v[0];
+    P->k[4] = v[3] - v[1] - v[2] + v[0], P->k[5] = v[6] - v[2] - v[4] + v[0], P->k[6] = v[5] - v[1] - v[4] + v[0];
+    P->k[7] = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
+}
+
+/* The first accepted crossing of patch P (box b, coefficients set) over
+ * [t0, t1]. */
 static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
 {
     const sg_ray *ray = rs->ray;
     const float *v = P->v;
-    float k1 = v[1] - v[0], k2 = v[2] - v[0], k3 = v[4] - v[0];
-    float k4 = v[3] - v[1] - v[2] + v[0], k5 = v[6] - v[2] - v[4] + v[0], k6 = v[5] - v[1] - v[4] + v[0];
-    float k7 = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
+    float k1 = P->k[1], k2 = P->k[2], k3 = P->k[3], k4 = P->k[4], k5 = P->k[5], k6 = P->k[6], k7 = P->k[7];
     sg_vec3 h = sg_v3_sub(b.hi, b.lo);
     float S = t1 - t0;
     sg_vec3 e = sg_v3_madd(ray->org, ray->dir, t0);
@@ -392,15 +404,14 @@ static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, flo
     return 0;
 }
 
-/* The first accepted crossing in leaf `leaf` (box b) over [t0, t1]. */
-static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+/* Leaf `leaf`'s patch. */
+static void leaf_patch(const sg_iso *iso, uint32_t leaf, patch *P)
 {
-    patch P;
-    P.L = &iso->leaves[leaf];
-    P.leaf = leaf;
+    P->L = &iso->leaves[leaf];
+    P->leaf = leaf;
     for (int k = 0; k < 8; ++k)
-        P.v[k] = (float)iso->cf[P.L->corner[k]] * iso->f_scale;
-    return patch_hit(iso, &P, b, t0, t1, rs, hit);
+        P->v[k] = (float)iso->cf[P->L->corner[k]] * iso->f_scale;
+    patch_coeffs(P);
 }
 
 /* Whether ray state rs may skip node `node` (cell interval [t0, t1],
@@ -454,6 +465,7 @@ static int lod_hit(const sg_iso *iso, uint32_t node, sg_aabb b, float t0, float 
         sg_vec3 c = sg_v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
         P.v[k] = sg_v3_dot(P.n, c) - D->d;
     }
+    patch_coeffs(&P);
     ray_state before = *rs;
     if (patch_hit(iso, &P, b, t0, t1, rs, hit))
         return 1;
@@ -658,7 +670,9 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
         }
         if (e.is_leaf) {
             leaves++;
-            if (leaf_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
+            patch P;
+            leaf_patch(iso, e.index, &P);
+            if (patch_hit(iso, &P, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
                 found = 1;
                 break;
             }
@@ -806,10 +820,12 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             float t0[4], t1[4];
             _mm_storeu_ps(t0, e->t0);
             _mm_storeu_ps(t1, e->t1);
+            patch P; /* once for the rays meeting it */
+            leaf_patch(iso, e->index, &P);
             for (unsigned m = act; m; m &= m - 1) {
                 int r = __builtin_ctz(m);
                 leaves[r]++;
-                if (leaf_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                if (patch_hit(iso, &P, box, t0[r], t1[r], &rs[r], &hits[r]))
                     found |= 1u << r;
             }
             continue;
