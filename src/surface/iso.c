@@ -64,7 +64,6 @@ void sg_iso_destroy(sg_iso *iso)
     sg_free(iso->leaves);
     sg_free(iso->cf);
     sg_free(iso->cn);
-    sg_free(iso->lod);
     sg_free(iso);
 }
 
@@ -200,7 +199,6 @@ uint64_t sg_iso_checksum(const sg_iso *iso)
     h = fnv(h, iso->leaves, iso->leaf_count * sizeof *iso->leaves);
     h = fnv(h, iso->cf, iso->corner_count * sizeof *iso->cf);
     h = fnv(h, iso->cn, iso->corner_count * sizeof *iso->cn);
-    h = fnv(h, iso->lod, iso->node_count * sizeof *iso->lod);
     return h;
 }
 
@@ -447,7 +445,7 @@ static inline int slab_skips(const iso_lod *D, sg_vec3 n, ray_state *rs, float t
  * patch (iso.h, "Levels of detail"). */
 static inline int lod_takes(const sg_iso *iso, uint32_t node, uint32_t size, float lod_w, float t0)
 {
-    return lod_w > 0.0f && iso->lod[node].leaf != ISO_NO_LOD && (float)size * iso->unit <= lod_w * t0;
+    return lod_w > 0.0f && iso->nodes[node].lod.leaf != ISO_NO_LOD && (float)size * iso->unit <= lod_w * t0;
 }
 
 /* The first accepted crossing of node `node`'s coarse patch (box b) over
@@ -456,14 +454,15 @@ static inline int lod_takes(const sg_iso *iso, uint32_t node, uint32_t size, flo
  * jump at the next face); only its counters keep the work done. */
 static int lod_hit(const sg_iso *iso, uint32_t node, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
 {
-    const iso_lod *D = &iso->lod[node];
+    const iso_lod *D = &iso->nodes[node].lod;
     patch P;
     P.L = NULL;
-    P.n = sg_iso_decode_normal(D->n);
+    sg_vec3 qn = iso_lod_normal(D);
+    P.n = sg_v3_normalize(qn);
     P.leaf = D->leaf;
     for (int k = 0; k < 8; ++k) {
         sg_vec3 c = sg_v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
-        P.v[k] = sg_v3_dot(P.n, c) - D->d;
+        P.v[k] = sg_v3_dot(qn, c) - D->d;
     }
     patch_coeffs(&P);
     ray_state before = *rs;
@@ -678,7 +677,8 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
             }
             continue;
         }
-        if (slab_skips(&iso->lod[e.index], sg_iso_decode_normal(iso->lod[e.index].n), &rs, e.t0, e.t1))
+        const iso_lod *D = &iso->nodes[e.index].lod;
+        if (slab_skips(D, iso_lod_normal(D), &rs, e.t0, e.t1))
             continue;
         if (lod_takes(iso, e.index, size, lod_w, e.t0) &&
             lod_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
@@ -830,11 +830,11 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             }
             continue;
         }
-        const iso_lod *D = &iso->lod[e->index];
+        const iso_lod *D = &iso->nodes[e->index].lod;
         float t0[4], t1[4];
         _mm_storeu_ps(t0, e->t0);
         _mm_storeu_ps(t1, e->t1);
-        sg_vec3 dn = sg_iso_decode_normal(D->n);
+        sg_vec3 dn = iso_lod_normal(D);
         for (unsigned m = act; m; m &= m - 1) {
             int r = __builtin_ctz(m);
             if (slab_skips(D, dn, &rs[r], t0[r], t1[r]))

@@ -87,8 +87,8 @@
  *    nearest the leaf centre): 36 bytes.
  *  - inner node: child mask, leaf-child mask, first inner child, first
  *    leaf child (children stored contiguously): 12 bytes; its coarse
- *    patch and slab (oct-encoded normal, plane offset, slab bounds,
- *    representative leaf): 20 bytes.
+ *    patch and slab (normal as 3 x int16, plane offset, slab bounds,
+ *    representative leaf): 24 bytes.
  *
  * Use:
  *     sg_iso_desc d = { .tolerance = 0.05f };     zero = defaults

@@ -694,10 +694,9 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
         goto fail;
     }
     st = lay_out(iso, &T, root, err);
-    if (st == SG_OK)
-        st = iso_lod_build(iso, err);
     if (st != SG_OK)
         goto fail;
+    iso_lod_build(iso);
     iso->lod_px = d.lod;
     int depth = 0;
     for (size_t p = 0; p < T.np; ++p)
@@ -712,7 +711,7 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     in->node_count = iso->node_count;
     in->leaf_count = iso->leaf_count;
     in->corner_count = iso->corner_count;
-    in->memory_bytes = sizeof *iso + iso->node_count * (sizeof(iso_node) + sizeof(iso_lod)) +
+    in->memory_bytes = sizeof *iso + iso->node_count * sizeof(iso_node) +
                        iso->leaf_count * sizeof(iso_leaf) +
                        iso->corner_count * (sizeof(int16_t) + sizeof(uint32_t));
     in->bytes_per_leaf = iso->leaf_count ? (double)in->memory_bytes / (double)iso->leaf_count : 0.0;

@@ -111,17 +111,18 @@ static void leaf_point(const sg_iso *iso, uint32_t leaf, const double lo[3], dou
  * (the coarse patch usable) only where the plane stands for the surface. */
 static void fit(sg_iso *iso, uint32_t q, const lod_sum *s, double edge)
 {
-    iso_lod *out = &iso->lod[q];
+    iso_lod *out = &iso->nodes[q].lod;
     double nl = sqrt(s->n[0] * s->n[0] + s->n[1] * s->n[1] + s->n[2] * s->n[2]);
     double n[3] = {0.0, 0.0, 1.0}; /* no surface below, or normals that cancel: any direction bounds */
     if (nl > 0.0)
         n[0] = s->n[0] / nl, n[1] = s->n[1] / nl, n[2] = s->n[2] / nl;
-    uint32_t code = sg_iso_encode_normal(sg_v3((float)n[0], (float)n[1], (float)n[2]));
-    sg_vec3 qn = sg_iso_decode_normal(code); /* the stored normal decides the offset */
+    *out = (iso_lod){{(int16_t)lrint(n[0] * 32767.0), (int16_t)lrint(n[1] * 32767.0), (int16_t)lrint(n[2] * 32767.0)},
+                     0, 0.0f, INFINITY, -INFINITY, ISO_NO_LOD};
+    sg_vec3 qn = iso_lod_normal(out); /* the stored normal decides the offset */
     const double *c = s->c;
     double d = (double)qn.x * ((double)iso->lo.x + c[0]) + (double)qn.y * ((double)iso->lo.y + c[1]) +
                (double)qn.z * ((double)iso->lo.z + c[2]);
-    *out = (iso_lod){code, (float)d, INFINITY, -INFINITY, ISO_NO_LOD};
+    out->d = (float)d;
     if (!(s->w > 0.0) || !(nl >= LOD_NORMAL_AGREE * s->w))
         return;
     /* variance along n: n^T (E[p p^T] - c c^T) n */
@@ -169,8 +170,8 @@ static void slab_rec(const sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint
 /* Every node's slab, top-down (each from its whole subtree). */
 static void slabs(sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint32_t z, uint32_t size)
 {
-    iso_lod *D = &iso->lod[q];
-    sg_vec3 f = sg_iso_decode_normal(D->n);
+    iso_lod *D = &iso->nodes[q].lod;
+    sg_vec3 f = iso_lod_normal(D);
     double n[3] = {f.x, f.y, f.z}, lo = INFINITY, hi = -INFINITY;
     slab_rec(iso, q, x, y, z, size, n, &lo, &hi);
     /* rounded outward, and by the float rounding of a query's dot product
@@ -233,15 +234,11 @@ static lod_sum walk(sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint32_t z,
     return s;
 }
 
-sg_status iso_lod_build(sg_iso *iso, sg_error *err)
+void iso_lod_build(sg_iso *iso)
 {
     assert(iso);
-    iso->lod = sg_alloc_array(iso->node_count ? iso->node_count : 1, sizeof *iso->lod);
-    if (!iso->lod)
-        return sg_error_set(err, SG_ERR_NOMEM, "iso: out of memory for %zu coarse patches", iso->node_count);
     if (iso->node_count) {
         walk(iso, 0, 0, 0, 0, 1u << iso->max_depth);
         slabs(iso, 0, 0, 0, 0, 1u << iso->max_depth);
     }
-    return SG_OK;
 }
