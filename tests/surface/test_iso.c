@@ -111,6 +111,22 @@ static void test_iso_sphere_accuracy(void **state)
     sg_pointset_free(&ps);
 }
 
+/* The plane y = 0.25 sampled on side x side points over [-half, half]^2,
+ * its ISO, the largest radius and the height tolerance of test 2 (the
+ * field of a plane is exact, so quantisation alone: f_scale / 2, plus
+ * float rounding). */
+static sg_iso *plane_iso(int side, float half, sg_pointset *ps, float *r, float *tol)
+{
+    sg_plane_points_desc pd = {.side = side, .half = half, .centre = sg_v3(0, 0.25f, 0)};
+    assert_int_equal(sg_points_make_plane(&pd, ps, NULL), SG_OK);
+    *r = max_radius(ps);
+    sg_iso *iso = build_iso(ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    *tol = 0.5f * info.f_scale + 1e-5f;
+    return iso;
+}
+
 /* 2. A plane: f = y - y0 exactly at every corner (all splats lie in the
  * plane with normal +y, so p̄ is in it and n̄ = +y), which a trilinear
  * patch reproduces; only quantisation (f_scale / 2) and float rounding of
@@ -119,14 +135,9 @@ static void test_iso_sphere_accuracy(void **state)
 static void test_iso_plane_exact(void **state)
 {
     (void)state;
-    sg_plane_points_desc pd = {.side = 100, .half = 1.0f, .centre = sg_v3(0, 0.25f, 0)};
     sg_pointset ps = {0};
-    assert_int_equal(sg_points_make_plane(&pd, &ps, NULL), SG_OK);
-    float r = max_radius(&ps);
-    sg_iso *iso = build_iso(&ps, 0);
-    sg_iso_info info;
-    sg_iso_get_info(iso, &info);
-    float tol = 0.5f * info.f_scale + 1e-5f;
+    float r, tol;
+    sg_iso *iso = plane_iso(100, 1.0f, &ps, &r, &tol);
     uint64_t rng = 7;
     float worst = 0, worst_ang = 0;
     int misses = 0;
@@ -163,14 +174,9 @@ static void test_iso_plane_exact(void **state)
 static void test_iso_plane_grazing_either_face(void **state)
 {
     (void)state;
-    sg_plane_points_desc pd = {.side = 200, .half = 2.0f, .centre = sg_v3(0, 0.25f, 0)};
     sg_pointset ps = {0};
-    assert_int_equal(sg_points_make_plane(&pd, &ps, NULL), SG_OK);
-    float r = max_radius(&ps);
-    sg_iso *iso = build_iso(&ps, 0);
-    sg_iso_info info;
-    sg_iso_get_info(iso, &info);
-    float tol = 0.5f * info.f_scale + 1e-5f;
+    float r, tol;
+    sg_iso *iso = plane_iso(200, 2.0f, &ps, &r, &tol);
     uint64_t rng = 11;
     int misses[2] = {0, 0}, wrong_side = 0;
     float worst = 0;
