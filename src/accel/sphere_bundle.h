@@ -1,0 +1,222 @@
+/* sphere_bundle.h — a ray against the SG_STREE_WIDTH nodes of a bundle
+ * (sphere_tree.h): which it enters, where, and which are small enough to
+ * be points. A scalar reference and an SSE4.1 (width 4) / AVX2 (width 8)
+ * kernel that compute the same operations in the same order without fused
+ * multiply-adds, so both give the same bits (tested on random bundles).
+ *
+ * The bound of a node is its sphere cut by its slab along the quantised
+ * normal u (a flat patch's sphere is mostly empty above and below it).
+ * Per lane, for a unit direction d and a = centre - origin:
+ *     b   = a . d                      distance to the centre's projection
+ *     p^2 = |a x d|^2                  squared distance of centre to line
+ *     m   = 8 FLT_EPSILON (|a|_1 + R)  rounding margin
+ *     h^2 = (R + m)^2 - p^2            sphere: [b - h - m, b + h + m]
+ *     slab: (x - c) . u in [lo - m, hi + m] along x = o + t d gives
+ *           t du in [lo - m + a.u, hi + m + a.u], du = d . u
+ *     tin = the later entry, tout = the earlier exit
+ *     hit = h^2 >= 0, tin <= tout, tout >= tmin, tin <= tfar
+ *     lod = 2 R < lod0 + lod1 b        small enough to be a point
+ * Why m bounds the rounding: each component of a x d is off by at most
+ * 2 FLT_EPSILON |a|_1 (a product pair and a difference, each term at most
+ * |a|_1 for unit d), so the computed distance is off by less than
+ * 2 sqrt(3) FLT_EPSILON |a|_1 < m; b and a.u are off by less than
+ * 3 FLT_EPSILON |a|_1, and the slab quotient's own rounding (relative
+ * 2 FLT_EPSILON of t <= |a| + R) is below m / |du|. So a node the exact
+ * ray enters is never missed and tin never exceeds the exact entry.
+ * Division by du = 0 (a ray parallel to the slab) gives infinities of the
+ * right signs: m > 0 keeps both numerators non-zero for a ray inside the
+ * slab, so it is never cut; a ray outside may get NaN, which the
+ * comparisons below treat as no cut (conservative). An empty lane (R =
+ * NaN) makes h^2 NaN and fails every comparison.
+ */
+#ifndef SG_ACCEL_SPHERE_BUNDLE_H
+#define SG_ACCEL_SPHERE_BUNDLE_H
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "accel/sphere_tree.h"
+
+#if defined(__AVX2__) && SG_STREE_WIDTH == 8
+#include <immintrin.h>
+#define SG_BUNDLE_SIMD 8
+#elif defined(__SSE4_1__) && SG_STREE_WIDTH == 4
+#include <smmintrin.h>
+#define SG_BUNDLE_SIMD 4
+#else
+#define SG_BUNDLE_SIMD 0
+#endif
+
+#define SG_BUNDLE_MARGIN (8.0f * FLT_EPSILON)
+
+/* A ray prepared for bundle tests. */
+typedef struct sg_bundle_ray {
+    float o[3], d[3];  /* origin, unit direction                 */
+    float tmin;
+    float lod0, lod1;  /* point test 2R < lod0 + lod1 b; 0, 0: never */
+} sg_bundle_ray;
+
+/* Scalar reference. Returns the mask of lanes entered in [tmin, tfar];
+ * tin[l] for every lane; *lod the mask of point-sized lanes. min and max
+ * are written as the SIMD instructions compute them (the second operand
+ * when a comparison fails), so NaN gives the same lane results. */
+static inline unsigned sg_bundle_test_scalar(const sg_stree_bundle *B, const sg_bundle_ray *r, float tfar,
+                                             float tin[SG_STREE_WIDTH], unsigned *lod)
+{
+    unsigned mask = 0, lm = 0;
+    for (int l = 0; l < SG_STREE_WIDTH; ++l) {
+        float ax = B->cx[l] - r->o[0], ay = B->cy[l] - r->o[1], az = B->cz[l] - r->o[2];
+        float b = ax * r->d[0] + ay * r->d[1] + az * r->d[2];
+        float qx = ay * r->d[2] - az * r->d[1];
+        float qy = az * r->d[0] - ax * r->d[2];
+        float qz = ax * r->d[1] - ay * r->d[0];
+        float p2 = qx * qx + qy * qy + qz * qz;
+        float R = B->r[l];
+        float m = SG_BUNDLE_MARGIN * (fabsf(ax) + fabsf(ay) + fabsf(az) + R);
+        float Rm = R + m;
+        float h2 = Rm * Rm - p2;
+        float hh = sqrtf(h2 > 0.0f ? h2 : 0.0f);
+        float t0 = b - hh - m, t1 = b + hh + m;
+        const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
+        float ux = (float)B->nx[l] * ns, uy = (float)B->ny[l] * ns, uz = (float)B->nz[l] * ns;
+        float au = ax * ux + ay * uy + az * uz;
+        float du = r->d[0] * ux + r->d[1] * uy + r->d[2] * uz;
+        float rs = R * ss;
+        float inv = 1.0f / du;
+        float n0 = ((float)B->slo[l] * rs - m + au) * inv;
+        float n1 = ((float)B->shi[l] * rs + m + au) * inv;
+        float tn = n0 < n1 ? n0 : n1, tf = n0 > n1 ? n0 : n1;
+        t0 = tn > t0 ? tn : t0;
+        t1 = tf < t1 ? tf : t1;
+        tin[l] = t0;
+        mask |= (unsigned)(h2 >= 0.0f && t0 <= t1 && t1 >= r->tmin && t0 <= tfar) << l;
+        lm |= (unsigned)(2.0f * R < r->lod0 + r->lod1 * b) << l;
+    }
+    *lod = lm;
+    return mask;
+}
+
+#if SG_BUNDLE_SIMD == 4
+static inline unsigned sg_bundle_test(const sg_stree_bundle *B, const sg_bundle_ray *r, float tfar,
+                                      float tin[SG_STREE_WIDTH], unsigned *lod)
+{
+    const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
+    const __m128 dx = _mm_set1_ps(r->d[0]), dy = _mm_set1_ps(r->d[1]), dz = _mm_set1_ps(r->d[2]);
+    const __m128 ax = _mm_sub_ps(_mm_load_ps(B->cx), _mm_set1_ps(r->o[0]));
+    const __m128 ay = _mm_sub_ps(_mm_load_ps(B->cy), _mm_set1_ps(r->o[1]));
+    const __m128 az = _mm_sub_ps(_mm_load_ps(B->cz), _mm_set1_ps(r->o[2]));
+    const __m128 b = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, dx), _mm_mul_ps(ay, dy)), _mm_mul_ps(az, dz));
+    const __m128 qx = _mm_sub_ps(_mm_mul_ps(ay, dz), _mm_mul_ps(az, dy));
+    const __m128 qy = _mm_sub_ps(_mm_mul_ps(az, dx), _mm_mul_ps(ax, dz));
+    const __m128 qz = _mm_sub_ps(_mm_mul_ps(ax, dy), _mm_mul_ps(ay, dx));
+    const __m128 p2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(qx, qx), _mm_mul_ps(qy, qy)), _mm_mul_ps(qz, qz));
+    const __m128 R = _mm_load_ps(B->r);
+    const __m128 l1 = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, ax), _mm_andnot_ps(sign, ay)),
+                                            _mm_andnot_ps(sign, az)),
+                                 R);
+    const __m128 m = _mm_mul_ps(_mm_set1_ps(SG_BUNDLE_MARGIN), l1);
+    const __m128 Rm = _mm_add_ps(R, m);
+    const __m128 h2 = _mm_sub_ps(_mm_mul_ps(Rm, Rm), p2);
+    /* h2 > 0 ? h2 : 0, NaN giving 0 as the scalar's ternary does. */
+    const __m128 hh = _mm_sqrt_ps(_mm_and_ps(_mm_cmpgt_ps(h2, zero), h2));
+    __m128 t0 = _mm_sub_ps(_mm_sub_ps(b, hh), m);
+    __m128 t1 = _mm_add_ps(_mm_add_ps(b, hh), m);
+    int32_t raw[5];
+    memcpy(&raw[0], B->nx, 4);
+    memcpy(&raw[1], B->ny, 4);
+    memcpy(&raw[2], B->nz, 4);
+    memcpy(&raw[3], B->slo, 4);
+    memcpy(&raw[4], B->shi, 4);
+    const __m128 ns = _mm_set1_ps(1.0f / SG_STREE_NORMAL_SCALE);
+    const __m128 ux = _mm_mul_ps(_mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(raw[0]))), ns);
+    const __m128 uy = _mm_mul_ps(_mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(raw[1]))), ns);
+    const __m128 uz = _mm_mul_ps(_mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(raw[2]))), ns);
+    const __m128 slo = _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(raw[3])));
+    const __m128 shi = _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(raw[4])));
+    const __m128 au = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, ux), _mm_mul_ps(ay, uy)), _mm_mul_ps(az, uz));
+    const __m128 du = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, ux), _mm_mul_ps(dy, uy)), _mm_mul_ps(dz, uz));
+    const __m128 rs = _mm_mul_ps(R, _mm_set1_ps(1.0f / SG_STREE_SLAB_SCALE));
+    const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), du);
+    const __m128 n0 = _mm_mul_ps(_mm_add_ps(_mm_sub_ps(_mm_mul_ps(slo, rs), m), au), inv);
+    const __m128 n1 = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(shi, rs), m), au), inv);
+    const __m128 tn = _mm_min_ps(n0, n1), tf = _mm_max_ps(n0, n1);
+    t0 = _mm_max_ps(tn, t0);
+    t1 = _mm_min_ps(tf, t1);
+    _mm_storeu_ps(tin, t0);
+    __m128 hit = _mm_and_ps(_mm_cmpge_ps(h2, zero), _mm_cmple_ps(t0, t1));
+    hit = _mm_and_ps(hit, _mm_cmpge_ps(t1, _mm_set1_ps(r->tmin)));
+    hit = _mm_and_ps(hit, _mm_cmple_ps(t0, _mm_set1_ps(tfar)));
+    const __m128 small = _mm_cmplt_ps(_mm_add_ps(R, R),
+                                      _mm_add_ps(_mm_set1_ps(r->lod0), _mm_mul_ps(_mm_set1_ps(r->lod1), b)));
+    *lod = (unsigned)_mm_movemask_ps(small);
+    return (unsigned)_mm_movemask_ps(hit);
+}
+#elif SG_BUNDLE_SIMD == 8
+static inline __m256 sg_bundle__i8(const int8_t *p)
+{
+    int64_t raw;
+    memcpy(&raw, p, sizeof raw);
+    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_cvtsi64_si128(raw)));
+}
+
+static inline unsigned sg_bundle_test(const sg_stree_bundle *B, const sg_bundle_ray *r, float tfar,
+                                      float tin[SG_STREE_WIDTH], unsigned *lod)
+{
+    const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
+    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]), dz = _mm256_set1_ps(r->d[2]);
+    const __m256 ax = _mm256_sub_ps(_mm256_load_ps(B->cx), _mm256_set1_ps(r->o[0]));
+    const __m256 ay = _mm256_sub_ps(_mm256_load_ps(B->cy), _mm256_set1_ps(r->o[1]));
+    const __m256 az = _mm256_sub_ps(_mm256_load_ps(B->cz), _mm256_set1_ps(r->o[2]));
+    const __m256 b =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, dx), _mm256_mul_ps(ay, dy)), _mm256_mul_ps(az, dz));
+    const __m256 qx = _mm256_sub_ps(_mm256_mul_ps(ay, dz), _mm256_mul_ps(az, dy));
+    const __m256 qy = _mm256_sub_ps(_mm256_mul_ps(az, dx), _mm256_mul_ps(ax, dz));
+    const __m256 qz = _mm256_sub_ps(_mm256_mul_ps(ax, dy), _mm256_mul_ps(ay, dx));
+    const __m256 p2 =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(qx, qx), _mm256_mul_ps(qy, qy)), _mm256_mul_ps(qz, qz));
+    const __m256 R = _mm256_load_ps(B->r);
+    const __m256 l1 = _mm256_add_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, ax), _mm256_andnot_ps(sign, ay)), _mm256_andnot_ps(sign, az)),
+        R);
+    const __m256 m = _mm256_mul_ps(_mm256_set1_ps(SG_BUNDLE_MARGIN), l1);
+    const __m256 Rm = _mm256_add_ps(R, m);
+    const __m256 h2 = _mm256_sub_ps(_mm256_mul_ps(Rm, Rm), p2);
+    const __m256 hh = _mm256_sqrt_ps(_mm256_and_ps(_mm256_cmp_ps(h2, zero, _CMP_GT_OQ), h2));
+    __m256 t0 = _mm256_sub_ps(_mm256_sub_ps(b, hh), m);
+    __m256 t1 = _mm256_add_ps(_mm256_add_ps(b, hh), m);
+    const __m256 ns = _mm256_set1_ps(1.0f / SG_STREE_NORMAL_SCALE);
+    const __m256 ux = _mm256_mul_ps(sg_bundle__i8(B->nx), ns);
+    const __m256 uy = _mm256_mul_ps(sg_bundle__i8(B->ny), ns);
+    const __m256 uz = _mm256_mul_ps(sg_bundle__i8(B->nz), ns);
+    const __m256 slo = sg_bundle__i8(B->slo), shi = sg_bundle__i8(B->shi);
+    const __m256 au =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, ux), _mm256_mul_ps(ay, uy)), _mm256_mul_ps(az, uz));
+    const __m256 du =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, ux), _mm256_mul_ps(dy, uy)), _mm256_mul_ps(dz, uz));
+    const __m256 rs = _mm256_mul_ps(R, _mm256_set1_ps(1.0f / SG_STREE_SLAB_SCALE));
+    const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), du);
+    const __m256 n0 = _mm256_mul_ps(_mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(slo, rs), m), au), inv);
+    const __m256 n1 = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(shi, rs), m), au), inv);
+    const __m256 tn = _mm256_min_ps(n0, n1), tf = _mm256_max_ps(n0, n1);
+    t0 = _mm256_max_ps(tn, t0);
+    t1 = _mm256_min_ps(tf, t1);
+    _mm256_storeu_ps(tin, t0);
+    __m256 hit = _mm256_and_ps(_mm256_cmp_ps(h2, zero, _CMP_GE_OQ), _mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+    hit = _mm256_and_ps(hit, _mm256_cmp_ps(t1, _mm256_set1_ps(r->tmin), _CMP_GE_OQ));
+    hit = _mm256_and_ps(hit, _mm256_cmp_ps(t0, _mm256_set1_ps(tfar), _CMP_LE_OQ));
+    const __m256 small = _mm256_cmp_ps(
+        _mm256_add_ps(R, R), _mm256_add_ps(_mm256_set1_ps(r->lod0), _mm256_mul_ps(_mm256_set1_ps(r->lod1), b)),
+        _CMP_LT_OQ);
+    *lod = (unsigned)_mm256_movemask_ps(small);
+    return (unsigned)_mm256_movemask_ps(hit);
+}
+#else
+static inline unsigned sg_bundle_test(const sg_stree_bundle *B, const sg_bundle_ray *r, float tfar,
+                                      float tin[SG_STREE_WIDTH], unsigned *lod)
+{
+    return sg_bundle_test_scalar(B, r, tfar, tin, lod);
+}
+#endif
+
+#endif

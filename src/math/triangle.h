@@ -1,0 +1,223 @@
+/* triangle.h — watertight ray/triangle intersection (Woop, Benthin & Wald
+ * 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)), as plain inline
+ * functions.
+ *
+ * Why this test: it decides which side of each edge the ray passes on from
+ * 2D edge functions U, V, W computed in a ray-aligned, sheared frame that
+ * depends on the ray only. Two triangles sharing an edge compute that
+ * edge's function from the same (translated, sheared) vertex values, so a
+ * ray through the edge can never see both as missed: no cracks on shared
+ * edges or vertices. When a function comes out exactly 0.0 in float (the
+ * ray grazes an edge or passes a vertex), all three are recomputed in
+ * double, where the products of floats are exact, so the sign is right.
+ * Edges and vertices are part of the triangle (a ray through a vertex may
+ * hit every triangle of the fan; the caller keeps the nearest, ties broken
+ * by its own order).
+ *
+ * Use:
+ *     sg_tri_ray tr = sg_tri_ray_prepare(org, dir);   once per ray
+ *     sg_tri_hit th;
+ *     if (sg_tri_intersect(&tr, v0, v1, v2, tmin, tmax, &th)) ... th.t, th.b1, th.b2, th.front
+ *
+ * Space: world space, any units; dir need not be unit (t is in units of
+ * |dir|). Barycentrics: the point is b0 v0 + b1 v1 + b2 v2, b0 = 1 - b1 - b2,
+ * each in [0, 1] up to rounding. Facing: `front` is 1 when the ray meets the
+ * side the counter-clockwise normal (v1 - v0) x (v2 - v0) points to, i.e.
+ * dot(dir, n) < 0, decided from the sign of the same determinant that found
+ * the hit (never contradicts it).
+ */
+#ifndef SG_MATH_TRIANGLE_H
+#define SG_MATH_TRIANGLE_H
+
+#include <math.h>
+#include <stdint.h>
+
+#include "math/vec3.h"
+
+typedef struct sg_tri_ray {
+    float org[3];  /* ray origin                                    */
+    int kx, ky, kz; /* axis permutation: kz the largest |dir| axis   */
+    float sx, sy, sz; /* shear: dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
+} sg_tri_ray;
+
+typedef struct sg_tri_hit {
+    float t;      /* distance along the ray, in units of |dir| */
+    float b1, b2; /* barycentric weights of v1 and v2          */
+    int front;    /* 1: ray meets the counter-clockwise side    */
+} sg_tri_hit;
+
+/* Per-ray set-up. dir must be finite and non-zero. */
+static inline sg_tri_ray sg_tri_ray_prepare(sg_vec3 org, sg_vec3 dir)
+{
+    sg_tri_ray r;
+    const float d[3] = {dir.x, dir.y, dir.z};
+    float ax = fabsf(dir.x), ay = fabsf(dir.y), az = fabsf(dir.z);
+    int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    /* Swapping kx and ky when dir[kz] < 0 keeps the winding, so the sign
+     * of the determinant means the same side for every ray. */
+    if (d[kz] < 0.0f) {
+        int s = kx;
+        kx = ky;
+        ky = s;
+    }
+    r.org[0] = org.x;
+    r.org[1] = org.y;
+    r.org[2] = org.z;
+    r.kx = kx;
+    r.ky = ky;
+    r.kz = kz;
+    r.sx = d[kx] / d[kz];
+    r.sy = d[ky] / d[kz];
+    r.sz = 1.0f / d[kz];
+    return r;
+}
+
+/* 1 and *out when the ray crosses the closed triangle (v0, v1, v2) at t in
+ * [tmin, tmax]; 0 otherwise (also for a triangle seen exactly edge-on,
+ * whose determinant is 0). */
+static inline int sg_tri_intersect(const sg_tri_ray *r, const float *v0, const float *v1, const float *v2,
+                                   float tmin, float tmax, sg_tri_hit *out)
+{
+    const int kx = r->kx, ky = r->ky, kz = r->kz;
+    const float ax = v0[kx] - r->org[kx], ay = v0[ky] - r->org[ky], az = v0[kz] - r->org[kz];
+    const float bx = v1[kx] - r->org[kx], by = v1[ky] - r->org[ky], bz = v1[kz] - r->org[kz];
+    const float cx = v2[kx] - r->org[kx], cy = v2[ky] - r->org[ky], cz = v2[kz] - r->org[kz];
+    const float Ax = ax - r->sx * az, Ay = ay - r->sy * az;
+    const float Bx = bx - r->sx * bz, By = by - r->sy * bz;
+    const float Cx = cx - r->sx * cz, Cy = cy - r->sy * cz;
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float W = Bx * Ay - By * Ax;
+    if (U == 0.0f || V == 0.0f || W == 0.0f) {
+        /* Products of floats are exact in double: the sign is exact. */
+        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
+        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
+        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+    }
+    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f))
+        return 0;
+    const float det = U + V + W;
+    if (det == 0.0f)
+        return 0;
+    const float T = U * (r->sz * az) + V * (r->sz * bz) + W * (r->sz * cz);
+    const float inv = 1.0f / det;
+    const float t = T * inv;
+    /* Written so that a NaN t fails. */
+    if (!(t >= tmin && t <= tmax))
+        return 0;
+    out->t = t;
+    out->b1 = V * inv;
+    out->b2 = W * inv;
+    /* det = -(n_z in the sheared frame), whose z axis is the ray's. */
+    out->front = det > 0.0f;
+    return 1;
+}
+
+/* Four triangles at once: their vertices' coordinates in the ray's
+ * permuted axes, gathered by the caller (sg_tri4_gather). Lanes outside
+ * `valid` are ignored. Returns the mask of lanes that sg_tri_intersect
+ * would report as hit, with its t, b1, b2 and front, bit for bit: the same
+ * operations in the same order (no fused multiply-adds), and lanes whose
+ * edge function comes out exactly 0.0 are redone by sg_tri_intersect
+ * itself (its double fallback). */
+typedef struct sg_tri4 {
+    float a[3][4], b[3][4], c[3][4]; /* [kx, ky, kz component][lane], origin-relative */
+    const float *v[4][3];            /* the lanes' vertex pointers (for the fallback)  */
+} sg_tri4;
+
+/* Fills lane l of t from the triangle (v0, v1, v2). */
+static inline void sg_tri4_gather(sg_tri4 *t, int l, const sg_tri_ray *r, const float *v0, const float *v1,
+                                  const float *v2)
+{
+    const int k[3] = {r->kx, r->ky, r->kz};
+    for (int i = 0; i < 3; ++i) {
+        t->a[i][l] = v0[k[i]] - r->org[k[i]];
+        t->b[i][l] = v1[k[i]] - r->org[k[i]];
+        t->c[i][l] = v2[k[i]] - r->org[k[i]];
+    }
+    t->v[l][0] = v0;
+    t->v[l][1] = v1;
+    t->v[l][2] = v2;
+}
+
+typedef struct sg_tri4_hit {
+    float t[4], b1[4], b2[4];
+    unsigned front; /* bit l: lane l met the counter-clockwise side */
+} sg_tri4_hit;
+
+/* Scalar reference of sg_tri_intersect4 over the gathered lanes. */
+static inline unsigned sg_tri_intersect4_scalar(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
+                                                float tmax, sg_tri4_hit *out)
+{
+    unsigned mask = 0;
+    out->front = 0;
+    for (int l = 0; l < 4; ++l) {
+        sg_tri_hit h;
+        if (!(valid >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
+            continue;
+        mask |= 1u << l;
+        out->t[l] = h.t;
+        out->b1[l] = h.b1;
+        out->b2[l] = h.b2;
+        out->front |= (unsigned)h.front << l;
+    }
+    return mask;
+}
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+
+static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
+                                         float tmax, sg_tri4_hit *out)
+{
+    const __m128 sx = _mm_set1_ps(r->sx), sy = _mm_set1_ps(r->sy), sz = _mm_set1_ps(r->sz);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 ax = _mm_loadu_ps(t->a[0]), ay = _mm_loadu_ps(t->a[1]), az = _mm_loadu_ps(t->a[2]);
+    const __m128 bx = _mm_loadu_ps(t->b[0]), by = _mm_loadu_ps(t->b[1]), bz = _mm_loadu_ps(t->b[2]);
+    const __m128 cx = _mm_loadu_ps(t->c[0]), cy = _mm_loadu_ps(t->c[1]), cz = _mm_loadu_ps(t->c[2]);
+    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(sy, az));
+    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(sy, bz));
+    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(sy, cz));
+    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
+    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
+    const __m128 Wf = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
+    const unsigned exact0 =
+        (unsigned)_mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)),
+                                            _mm_cmpeq_ps(Wf, zero))) & valid;
+    const __m128 anyneg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(Wf, zero));
+    const __m128 anypos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(Wf, zero));
+    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), Wf);
+    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(sz, az)), _mm_mul_ps(V, _mm_mul_ps(sz, bz))),
+                                _mm_mul_ps(Wf, _mm_mul_ps(sz, cz)));
+    const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), det);
+    const __m128 tt = _mm_mul_ps(T, inv);
+    __m128 ok = _mm_andnot_ps(_mm_and_ps(anyneg, anypos), _mm_cmpneq_ps(det, zero));
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(tt, _mm_set1_ps(tmin)), _mm_cmple_ps(tt, _mm_set1_ps(tmax))));
+    unsigned mask = (unsigned)_mm_movemask_ps(ok) & valid & ~exact0;
+    _mm_storeu_ps(out->t, tt);
+    _mm_storeu_ps(out->b1, _mm_mul_ps(V, inv));
+    _mm_storeu_ps(out->b2, _mm_mul_ps(Wf, inv));
+    out->front = (unsigned)_mm_movemask_ps(_mm_cmpgt_ps(det, zero)) & mask;
+    for (int l = 0; l < 4; ++l) {
+        sg_tri_hit h;
+        if (!(exact0 >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
+            continue;
+        mask |= 1u << l;
+        out->t[l] = h.t;
+        out->b1[l] = h.b1;
+        out->b2[l] = h.b2;
+        out->front |= (unsigned)h.front << l;
+    }
+    return mask;
+}
+#else
+static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
+                                         float tmax, sg_tri4_hit *out)
+{
+    return sg_tri_intersect4_scalar(r, t, valid, tmin, tmax, out);
+}
+#endif
+
+#endif

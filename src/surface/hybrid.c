@@ -1,0 +1,453 @@
+/* hybrid.c — creating the hybrid point/triangle surface (Ye 2005, PPRT
+ * §3.1) from a mesh, and what a hit gives a renderer or a bake: light
+ * sites and weights, colour, spawned rays. The traversal is in
+ * hybrid_trace.c. See hybrid.h for the contract, hybrid_int.h for the
+ * invariants.
+ *
+ * States: CHECKED (the mesh validated; degenerate triangles set aside) ->
+ * NORMALS (vertex normals given or computed) -> BUILT (sphere tree over
+ * the traced triangles) -> PACKED (triangles in leaf order, vertices
+ * copied) -> queryable. sg_hybrid_create runs them all or fails whole and
+ * frees what it took.
+ *
+ * Degenerate triangles. A triangle whose edge vectors have a zero cross
+ * product in double (exact for the float coordinates of any mesh whose
+ * extent spans fewer than 2^29 of its smallest coordinate steps) has no
+ * area and no normal: it is left out of the hierarchy, where it could only
+ * ever be hit edge-on, and counted. Keeping the traced set free of them
+ * is what lets every node have a normal cone (sphere_tree.c).
+ */
+#include "surface/hybrid_int.h"
+
+#include <assert.h>
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "math/oct.h"
+
+enum { W = SG_STREE_WIDTH };
+
+/* Vertex normal of a vertex that no traced triangle uses. */
+#define NO_NORMAL 0x80008000u
+
+static const char *mesh_name(const sg_hybrid_desc *d) { return d && d->name ? d->name : "mesh"; }
+
+static int finite3(const float *v) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
+
+/* (v1 - v0) x (v2 - v0) in double. */
+static void cross_d(const float *a, const float *b, const float *c, double n[3])
+{
+    double e1[3] = {(double)b[0] - a[0], (double)b[1] - a[1], (double)b[2] - a[2]};
+    double e2[3] = {(double)c[0] - a[0], (double)c[1] - a[1], (double)c[2] - a[2]};
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+void sg_hybrid_destroy(sg_hybrid *h)
+{
+    if (!h)
+        return;
+    sg_stree_free(&h->tree);
+    sg_free(h->tri);
+    sg_free(h->tri_id);
+    sg_free(h->pos);
+    sg_free(h->vnormal);
+    sg_free(h->vcolor);
+    sg_free(h);
+}
+
+/* Validates the mesh; fills the traced triangles (input indices) and
+ * counts the degenerate ones. */
+static sg_status check_mesh(const sg_hybrid_desc *d, const sg_mesh *m, uint32_t **traced, size_t *count,
+                            sg_error *err)
+{
+    const char *name = mesh_name(d);
+    if (m->triangle_count == 0 || !m->triangles)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: the mesh has no triangles", name);
+    if (m->triangle_count > SG_STREE_MAX_TRIANGLES)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: %zu triangles exceed the limit of %u", name,
+                            m->triangle_count, SG_STREE_MAX_TRIANGLES);
+    if (m->vertex_count == 0 || !m->positions)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: the mesh has no vertex positions", name);
+    if (m->vertex_count >= SG_INVALID_ID)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: %zu vertices exceed 32-bit ids", name, m->vertex_count);
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (!finite3(m->positions + 3 * v))
+            return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: vertex %zu: position is not finite", name, v);
+        if (m->normals && !(d->flags & SG_HYBRID_FLAT_SHADING)) {
+            const float *n = m->normals + 3 * v;
+            if (!finite3(n) || n[0] * n[0] + n[1] * n[1] + n[2] * n[2] < 1e-20f)
+                return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: vertex %zu: normal is not finite or zero", name,
+                                    v);
+        }
+        if (m->colors && !finite3(m->colors + 3 * v))
+            return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: vertex %zu: colour is not finite", name, v);
+    }
+    uint32_t *ids = sg_alloc_array(m->triangle_count, sizeof *ids);
+    if (!ids)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu triangles", name, m->triangle_count);
+    size_t n = 0;
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        const uint32_t *v = m->triangles + 3 * t;
+        for (int k = 0; k < 3; ++k)
+            if (v[k] >= m->vertex_count) {
+                sg_free(ids);
+                return sg_error_set(err, SG_ERR_INVALID_ARG,
+                                    "%s: triangle %zu: vertex index %u is out of range (%zu vertices)", name, t,
+                                    v[k], m->vertex_count);
+            }
+        double c[3];
+        cross_d(m->positions + 3 * (size_t)v[0], m->positions + 3 * (size_t)v[1], m->positions + 3 * (size_t)v[2],
+                c);
+        if (c[0] != 0.0 || c[1] != 0.0 || c[2] != 0.0)
+            ids[n++] = (uint32_t)t;
+    }
+    if (n == 0) {
+        sg_free(ids);
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: all %zu triangles have zero area", name,
+                            m->triangle_count);
+    }
+    *traced = ids;
+    *count = n;
+    return SG_OK;
+}
+
+/* Vertex normals (invariant 2): the mesh's own, or the area-weighted mean
+ * of the traced triangles' normals, summed in input order (deterministic). */
+static sg_status make_normals(sg_hybrid *h, const sg_mesh *m, const uint32_t *traced, size_t count,
+                              const char *name, sg_error *err)
+{
+    const size_t nv = m->vertex_count;
+    h->vnormal = sg_alloc_array(nv, sizeof *h->vnormal);
+    if (!h->vnormal)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu vertex normals", name, nv);
+    if (m->normals) {
+        for (size_t v = 0; v < nv; ++v) {
+            const float *n = m->normals + 3 * v;
+            h->vnormal[v] = sg_oct_encode(sg_v3_normalize(sg_v3(n[0], n[1], n[2])));
+        }
+        return SG_OK;
+    }
+    float *sum = sg_calloc_array(nv, 3 * sizeof(float));
+    uint8_t *used = sg_calloc_array(nv, 1);
+    if (!sum || !used) {
+        sg_free(sum);
+        sg_free(used);
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu vertex normals", name, nv);
+    }
+    for (size_t i = 0; i < count; ++i) {
+        const uint32_t *v = m->triangles + 3 * (size_t)traced[i];
+        double c[3];
+        cross_d(m->positions + 3 * (size_t)v[0], m->positions + 3 * (size_t)v[1], m->positions + 3 * (size_t)v[2],
+                c);
+        for (int k = 0; k < 3; ++k) {
+            float *s = sum + 3 * (size_t)v[k];
+            s[0] += (float)c[0];
+            s[1] += (float)c[1];
+            s[2] += (float)c[2];
+            used[v[k]] = 1;
+        }
+    }
+    /* A vertex whose triangles' normals cancel (a fin of a non-manifold
+     * edge) takes the normal of its first triangle. */
+    for (size_t i = 0; i < count; ++i) {
+        const uint32_t *v = m->triangles + 3 * (size_t)traced[i];
+        for (int k = 0; k < 3; ++k) {
+            float *s = sum + 3 * (size_t)v[k];
+            if (s[0] == 0.0f && s[1] == 0.0f && s[2] == 0.0f) {
+                double c[3];
+                cross_d(m->positions + 3 * (size_t)v[0], m->positions + 3 * (size_t)v[1],
+                        m->positions + 3 * (size_t)v[2], c);
+                s[0] = (float)c[0];
+                s[1] = (float)c[1];
+                s[2] = (float)c[2];
+            }
+        }
+    }
+    for (size_t v = 0; v < nv; ++v) {
+        const float *s = sum + 3 * v;
+        h->vnormal[v] = used[v] ? sg_oct_encode(sg_v3_normalize(sg_v3(s[0], s[1], s[2]))) : NO_NORMAL;
+    }
+    sg_free(sum);
+    sg_free(used);
+    return SG_OK;
+}
+
+sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_hybrid **out, sg_error *err)
+{
+    double t_start = omp_get_wtime();
+    const char *name = mesh_name(desc);
+    if (!mesh || !out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: NULL mesh or out", name);
+    sg_hybrid_desc d = desc ? *desc : (sg_hybrid_desc){0};
+    if (d.flags & ~(uint32_t)(SG_HYBRID_CULL_BACKFACES | SG_HYBRID_FLAT_SHADING))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown flags 0x%x", name, d.flags);
+    if (d.traversal != SG_HYBRID_TRAVERSE_STACK && d.traversal != SG_HYBRID_TRAVERSE_HEAP)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown traversal %d", name, (int)d.traversal);
+    if (d.leaf_max == 0)
+        d.leaf_max = 4;
+    if (d.leaf_max < 1 || d.leaf_max > SG_STREE_MAX_LEAF)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: leaf_max %d is outside 1..%d", name, d.leaf_max,
+                            SG_STREE_MAX_LEAF);
+    if (d.threads < 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: threads %d is negative", name, d.threads);
+    d.name = NULL;
+
+    uint32_t *traced = NULL, *ctri = NULL;
+    size_t count = 0;
+    sg_status st = check_mesh(&d, mesh, &traced, &count, err);
+    if (st != SG_OK)
+        return st;
+    sg_hybrid *h = sg_calloc_array(1, sizeof *h);
+    if (!h) {
+        sg_free(traced);
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", name);
+    }
+    h->desc = d;
+    h->vertex_count = mesh->vertex_count;
+    const size_t nv = mesh->vertex_count;
+
+    if (!(d.flags & SG_HYBRID_FLAT_SHADING) && (st = make_normals(h, mesh, traced, count, name, err)) != SG_OK)
+        goto fail;
+
+    /* The traced triangles, compacted, for the tree. */
+    ctri = sg_alloc_array(count, 3 * sizeof *ctri);
+    if (!ctri) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu triangles", name, count);
+        goto fail;
+    }
+    sg_aabb bounds = sg_aabb_empty();
+    for (size_t i = 0; i < count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = mesh->triangles[3 * (size_t)traced[i] + (size_t)k];
+            ctri[3 * i + (size_t)k] = v;
+            const float *p = mesh->positions + 3 * (size_t)v;
+            bounds = sg_aabb_grow(bounds, sg_v3(p[0], p[1], p[2]));
+        }
+
+    sg_stree_desc sd = {.vertex_count = nv, .positions = mesh->positions, .triangle_count = count,
+                        .triangles = ctri, .colors = mesh->colors, .leaf_max = d.leaf_max, .threads = d.threads};
+    if ((st = sg_stree_build(&sd, &h->tree, err)) != SG_OK) {
+        char inner[SG_ERROR_MESSAGE_MAX];
+        snprintf(inner, sizeof inner, "%s", err ? err->message : "");
+        st = sg_error_set(err, st, "%s: %s", name, inner);
+        goto fail;
+    }
+
+    /* Invariant 1: triangles in leaf order. */
+    h->tri = sg_alloc_array(count, 3 * sizeof *h->tri);
+    h->tri_id = sg_alloc_array(count, sizeof *h->tri_id);
+    h->pos = sg_alloc_array(nv, 3 * sizeof *h->pos);
+    if (mesh->colors)
+        h->vcolor = sg_alloc_array(nv, 3 * sizeof *h->vcolor);
+    if (!h->tri || !h->tri_id || !h->pos || (mesh->colors && !h->vcolor)) {
+        st = sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu triangles and %zu vertices", name, count,
+                          nv);
+        goto fail;
+    }
+    for (size_t i = 0; i < count; ++i) {
+        uint32_t c = h->tree.order[i];
+        memcpy(h->tri + 3 * i, ctri + 3 * (size_t)c, 3 * sizeof *h->tri);
+        h->tri_id[i] = traced[c];
+    }
+    sg_free(h->tree.order); /* invariant 3 */
+    h->tree.order = NULL;
+    memcpy(h->pos, mesh->positions, nv * 3 * sizeof *h->pos);
+    if (h->vcolor)
+        memcpy(h->vcolor, mesh->colors, nv * 3 * sizeof *h->vcolor);
+    sg_free(ctri);
+    ctri = NULL;
+
+    float extent = fmaxf(fmaxf(fabsf(bounds.lo.x), fabsf(bounds.hi.x)),
+                         fmaxf(fmaxf(fabsf(bounds.lo.y), fabsf(bounds.hi.y)),
+                               fmaxf(fabsf(bounds.lo.z), fabsf(bounds.hi.z))));
+    sg_hybrid_info *in = &h->info;
+    in->diagonal = sg_aabb_diagonal(bounds);
+    /* A hit point is a barycentric sum of float vertices: off its triangle
+     * by a few units in the last place of the largest coordinate. */
+    h->self_eps = 8.0f * FLT_EPSILON * (extent + in->diagonal);
+    in->input_triangles = mesh->triangle_count;
+    in->triangle_count = count;
+    in->degenerate_count = mesh->triangle_count - count;
+    in->vertex_count = nv;
+    in->node_count = h->tree.node_count;
+    in->leaf_count = h->tree.leaf_count;
+    in->node_slots = h->tree.bundle_count * W;
+    in->width = W;
+    in->leaf_max = d.leaf_max;
+    in->depth = h->tree.depth;
+    in->memory_nodes = h->tree.bundle_count * sizeof(sg_stree_bundle);
+    in->memory_triangles = count * (3 * sizeof *h->tri + sizeof *h->tri_id);
+    in->memory_vertices = nv * 3 * sizeof *h->pos;
+    in->memory_normals = h->vnormal ? nv * sizeof *h->vnormal : 0;
+    in->memory_colors = (h->vcolor ? nv * 3 * sizeof(float) : 0) +
+                        (h->tree.colors ? in->node_slots * 3 * sizeof(float) : 0);
+    in->memory_bytes = sizeof *h + in->memory_nodes + in->memory_triangles + in->memory_vertices +
+                       in->memory_normals + in->memory_colors;
+    in->bytes_per_triangle = (double)in->memory_bytes / (double)count;
+    in->bounds = bounds;
+    sg_free(traced);
+    in->build_seconds = omp_get_wtime() - t_start;
+    *out = h;
+    return SG_OK;
+
+fail:
+    sg_free(traced);
+    sg_free(ctri);
+    sg_hybrid_destroy(h);
+    return st;
+}
+
+void sg_hybrid_get_info(const sg_hybrid *h, sg_hybrid_info *info) { *info = h->info; }
+
+size_t sg_hybrid_site_count(const sg_hybrid *h) { return h->vertex_count + h->info.node_slots; }
+
+/* Node k's radius, centre, mean normal and disk centre. */
+static int node_geometry(const sg_hybrid *h, uint32_t k, float *r, sg_vec3 *c, sg_vec3 *n, sg_vec3 *disk)
+{
+    if ((size_t)k >= h->info.node_slots)
+        return 0;
+    const sg_stree_bundle *B = &h->tree.bundles[k / W];
+    const int l = (int)(k % W);
+    if (!(B->r[l] > 0.0f))
+        return 0; /* empty lane (NaN) */
+    *r = B->r[l];
+    *c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
+    *n = sg_stree_normal(B, l);
+    *disk = sg_v3_madd(*c, *n, (float)B->offset[l] / 127.0f * B->r[l]);
+    return 1;
+}
+
+int sg_hybrid_site(const sg_hybrid *h, uint32_t id, sg_vec3 *pos, sg_vec3 *normal)
+{
+    if ((size_t)id < h->vertex_count) {
+        const float *p = h->pos + 3 * (size_t)id;
+        *pos = sg_v3(p[0], p[1], p[2]);
+        *normal = h->vnormal && h->vnormal[id] != NO_NORMAL ? sg_oct_decode(h->vnormal[id]) : sg_v3(0, 0, 0);
+        return 1;
+    }
+    float r;
+    sg_vec3 c, n, disk;
+    if ((size_t)id - h->vertex_count >= h->info.node_slots ||
+        !node_geometry(h, (uint32_t)((size_t)id - h->vertex_count), &r, &c, &n, &disk))
+        return 0;
+    *pos = disk;
+    *normal = n;
+    return 1;
+}
+
+int sg_hybrid_hit_sites(const sg_hybrid *h, const sg_hybrid_hit *hit, uint32_t *ids, float *weights, int max)
+{
+    if (max <= 0)
+        return 0;
+    if (hit->node != SG_INVALID_ID) {
+        ids[0] = (uint32_t)(h->vertex_count + hit->node);
+        weights[0] = 1.0f;
+        return 1;
+    }
+    if (hit->triangle == SG_INVALID_ID)
+        return 0;
+    float w[3] = {1.0f - hit->b1 - hit->b2, hit->b1, hit->b2};
+    float sum = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        w[k] = w[k] < 0.0f ? 0.0f : (w[k] > 1.0f ? 1.0f : w[k]);
+        sum += w[k];
+    }
+    int order[3] = {0, 1, 2};
+    if (max < 3) /* largest first; ties keep vertex order */
+        for (int i = 1; i < 3; ++i)
+            for (int j = i; j > 0 && w[order[j]] > w[order[j - 1]]; --j) {
+                int s = order[j];
+                order[j] = order[j - 1];
+                order[j - 1] = s;
+            }
+    int n = max < 3 ? max : 3;
+    sum = 0.0f;
+    for (int i = 0; i < n; ++i)
+        sum += w[order[i]];
+    for (int i = 0; i < n; ++i) {
+        ids[i] = hit->vertex[order[i]];
+        weights[i] = sum > 0.0f ? w[order[i]] / sum : 1.0f / (float)n;
+    }
+    return n;
+}
+
+int sg_hybrid_hit_color(const sg_hybrid *h, const sg_hybrid_hit *hit, sg_vec3 *rgb)
+{
+    if (!h->vcolor)
+        return 0;
+    if (hit->node != SG_INVALID_ID) {
+        if ((size_t)hit->node >= h->info.node_slots)
+            return 0;
+        const float *c = h->tree.colors + 3 * (size_t)hit->node;
+        *rgb = sg_v3(c[0], c[1], c[2]);
+        return 1;
+    }
+    if (hit->triangle == SG_INVALID_ID)
+        return 0;
+    uint32_t ids[3];
+    float w[3];
+    int n = sg_hybrid_hit_sites(h, hit, ids, w, 3);
+    sg_vec3 s = sg_v3(0, 0, 0);
+    for (int i = 0; i < n; ++i) {
+        const float *c = h->vcolor + 3 * (size_t)ids[i];
+        s = sg_v3_madd(s, sg_v3(c[0], c[1], c[2]), w[i]);
+    }
+    *rgb = s;
+    return 1;
+}
+
+sg_ray sg_hybrid_spawn_ray(const sg_hybrid *h, const sg_hybrid_hit *hit, sg_vec3 dir, float tmax)
+{
+    sg_ray r = {.org = hit->p, .dir = dir, .tmin = 0.0f, .tmax = tmax};
+    r.flags = sg_v3_dot(dir, hit->ng) >= 0.0f ? SG_RAY_FRONT_ONLY : SG_RAY_BACK_ONLY;
+    r.self_n = hit->ng;
+    r.self_r = h->self_eps;
+    float rad;
+    sg_vec3 c, n, disk;
+    if (hit->node != SG_INVALID_ID && node_geometry(h, hit->node, &rad, &c, &n, &disk))
+        r.self_r = 2.0f * rad;
+    return r;
+}
+
+sg_footprint sg_hybrid_spawn_footprint(const sg_footprint *fp, const sg_hybrid_hit *hit, float spread)
+{
+    sg_footprint f = {0.0f, 0.0f, 0.0f};
+    if (!fp || !(fp->lod > 0.0f))
+        return f;
+    f.width = fp->width + fp->spread * hit->t;
+    f.spread = spread;
+    f.lod = fp->lod;
+    return f;
+}
+
+static uint64_t fnv(uint64_t h, const void *data, size_t bytes)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; p && i < bytes; ++i) {
+        h ^= p[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+uint64_t sg_hybrid_layout_hash(const sg_hybrid *h)
+{
+    uint64_t x = 0xcbf29ce484222325ull;
+    x = fnv(x, h->tree.bundles, h->tree.bundle_count * sizeof *h->tree.bundles);
+    if (h->tree.colors)
+        x = fnv(x, h->tree.colors, h->info.node_slots * 3 * sizeof(float));
+    x = fnv(x, h->tri, h->info.triangle_count * 3 * sizeof *h->tri);
+    x = fnv(x, h->tri_id, h->info.triangle_count * sizeof *h->tri_id);
+    x = fnv(x, h->pos, h->vertex_count * 3 * sizeof *h->pos);
+    if (h->vnormal)
+        x = fnv(x, h->vnormal, h->vertex_count * sizeof *h->vnormal);
+    if (h->vcolor)
+        x = fnv(x, h->vcolor, h->vertex_count * 3 * sizeof *h->vcolor);
+    return x;
+}

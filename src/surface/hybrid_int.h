@@ -1,0 +1,32 @@
+/* hybrid_int.h — the inside of sg_hybrid, shared by hybrid.c (create,
+ * sites, spawn) and hybrid_trace.c (traversal). Not a public header.
+ *
+ * Invariants (hybrid.c establishes them, hybrid_trace.c relies on them):
+ *  1. tri[3 i .. 3 i + 2] are the vertex ids of the i-th triangle in the
+ *     tree's leaf order, tri_id[i] its input index, and every triangle
+ *     there has non-zero area (computed in double);
+ *  2. pos holds vertex_count finite positions; vnormal, when not NULL,
+ *     vertex_count oct-encoded unit normals (oct.h);
+ *  3. tree satisfies sphere_tree.h's invariants over exactly these
+ *     triangles (tree.order is released once tri/tri_id are made).
+ */
+#ifndef SG_SURFACE_HYBRID_INT_H
+#define SG_SURFACE_HYBRID_INT_H
+
+#include "accel/sphere_tree.h"
+#include "surface/hybrid.h"
+
+struct sg_hybrid {
+    sg_hybrid_desc desc;   /* with defaults filled in (name not kept)        */
+    sg_stree tree;         /* node bundles; order released (invariant 3)     */
+    uint32_t *tri;         /* 3 per traced triangle, leaf order              */
+    uint32_t *tri_id;      /* input index per traced triangle, leaf order    */
+    float *pos;            /* 3 per vertex                                   */
+    uint32_t *vnormal;     /* per vertex, oct.h; NULL with flat shading      */
+    float *vcolor;         /* 3 per vertex; NULL when the mesh had none      */
+    size_t vertex_count;
+    float self_eps;        /* self_r of rays spawned at triangle hits        */
+    sg_hybrid_info info;
+};
+
+#endif

@@ -1,0 +1,451 @@
+/* hybrid_trace.c — nearest-first traversal of the hybrid hierarchy with
+ * level of detail (Ye 2005, PPRT §3.2-3.4, §4.4). See hybrid.h.
+ *
+ * Nearest first. Ye keeps the spheres a ray has entered in a heap ordered
+ * by entry distance and stops at the first hit (§3.2-3.3). That first hit
+ * is not always the nearest (a triangle in a sphere entered early may lie
+ * behind one in a sphere entered later), so here a traversal stops only
+ * when the next sphere starts beyond the best hit so far. Two orders are
+ * implemented: Ye's binary heap (SG_HYBRID_TRAVERSE_HEAP) and an ordered
+ * stack (children pushed farthest first, so the nearest is popped next;
+ * SG_HYBRID_TRAVERSE_STACK). Both give the same hit, bit for bit: the
+ * accepted crossings do not depend on the order (a node is hit as a point
+ * or opened by a rule of the node and the ray alone), pruning only drops
+ * spheres that begin beyond the best hit, and ties at equal t go to the
+ * lower key (triangles by leaf order, then nodes), so the minimum is
+ * unique (invariant 2).
+ *
+ * Level of detail (§3.4). Ye compares the projected diameter d/z 2R with a
+ * threshold; with a footprint of width w(t) = width + spread t per pixel
+ * that is 2R < lod w(b), b the distance to the centre along the ray. Ye
+ * then returns the node's centre as the hit. Here the node is hit as a
+ * disk through its area-weighted centroid with its mean normal, clipped by
+ * its sphere, and only when two further conditions hold; otherwise the
+ * node is opened as if it were large:
+ *   - its triangles all face the same way along the ray (|d.n| > sin of
+ *     the normal cone's half-angle): no silhouette crosses the node, so
+ *     a disk neither widens nor trims the outline;
+ *   - the ray meets the disk: a ray through the sphere beside the disk
+ *     goes on to whatever is really there, so disks never leave holes.
+ * A node whose triangles all face away from what the ray accepts (a
+ * FRONT_ONLY ray and an all-back-facing node) is skipped whole.
+ *
+ * Sphere tests: accel/sphere_bundle.h (a rounding margin keeps them
+ * conservative, and entry distances are lowered by it, so pruning never
+ * drops a sphere that holds the best crossing).
+ *
+ * Invariants:
+ *  1. queries read the hierarchy only (thread-safe);
+ *  2. the result is the minimum of (t, key) over the accepted crossings
+ *     of the nodes the ray reaches, whatever the order;
+ *  3. the stack never holds more than (W - 1) * SG_STREE_MAX_DEPTH + 1
+ *     entries (sphere_tree.h invariant 3); the heap holds at most
+ *     HEAP_CAP and a ray that would need more is traced again with the
+ *     stack (counted in heap_overflows; same hit by invariant 2).
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "accel/sphere_bundle.h"
+#include "math/oct.h"
+#include "math/triangle.h"
+#include "surface/hybrid_int.h"
+
+enum {
+    W = SG_STREE_WIDTH,
+    STACK_CAP = (W - 1) * SG_STREE_MAX_DEPTH + 2,
+    HEAP_CAP = 1024
+};
+
+#define LOD_BIT 0x80000000u
+/* Facing tests against a normal cone leave this much room (|d.n| units)
+ * for the rounding of the stored sine and of the triangle test's
+ * determinant sign. */
+#define CONE_MARGIN 1e-4f
+
+typedef struct entry {
+    float t;      /* entry distance of the node's sphere (lowered by m) */
+    uint32_t id;  /* node id | LOD_BIT when it may be hit as a point    */
+} entry;
+
+typedef struct tray {
+    float o[3], d[3];
+    float tmin;
+    sg_bundle_ray br;  /* the same ray for sphere tests, with the LOD test */
+    sg_tri_ray tr;
+    int accept_front, accept_back;
+    int cull;          /* skip nodes that face the wrong way             */
+    const sg_ray *ray;
+} tray;
+
+typedef struct best {
+    float t;
+    uint64_t key;      /* triangle: leaf-order index; node: 2^32 + id   */
+    float b1, b2;
+    int front;
+} best;
+
+typedef struct counters {
+    uint64_t pops, spheres, triangles, lod_tests, culled;
+} counters;
+
+static int setup(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, tray *r)
+{
+    if (!sg_v3_isfinite(ray->org) || !sg_v3_isfinite(ray->dir) || !(ray->tmax >= ray->tmin) || isnan(ray->tmin))
+        return 0;
+    if (ray->dir.x == 0.0f && ray->dir.y == 0.0f && ray->dir.z == 0.0f)
+        return 0;
+    r->o[0] = ray->org.x;
+    r->o[1] = ray->org.y;
+    r->o[2] = ray->org.z;
+    r->d[0] = ray->dir.x;
+    r->d[1] = ray->dir.y;
+    r->d[2] = ray->dir.z;
+    r->tmin = ray->tmin;
+    r->tr = sg_tri_ray_prepare(ray->org, ray->dir);
+    sg_bundle_ray *br = &r->br;
+    memcpy(br->o, r->o, sizeof br->o);
+    memcpy(br->d, r->d, sizeof br->d);
+    br->tmin = ray->tmin;
+    br->lod0 = br->lod1 = 0.0f;
+    if (fp && fp->lod > 0.0f && isfinite(fp->lod) && fp->width >= 0.0f && isfinite(fp->width) &&
+        fp->spread >= 0.0f && isfinite(fp->spread)) {
+        br->lod0 = fp->lod * fp->width;
+        br->lod1 = fp->lod * fp->spread;
+    }
+    uint32_t flags = ray->flags;
+    if ((h->desc.flags & SG_HYBRID_CULL_BACKFACES) && !(flags & (SG_RAY_FRONT_ONLY | SG_RAY_BACK_ONLY)))
+        flags = SG_RAY_FRONT_ONLY;
+    r->accept_front = !(flags & SG_RAY_BACK_ONLY);
+    r->accept_back = !(flags & SG_RAY_FRONT_ONLY);
+    r->cull = !r->accept_front || !r->accept_back;
+    r->ray = ray;
+    return 1;
+}
+
+static inline int better(float t, uint64_t key, const best *b)
+{
+    return t < b->t || (t == b->t && key < b->key);
+}
+
+/* What a popped node's point attributes decide. */
+enum { NODE_OPEN = 0, NODE_SKIP = 1, NODE_HIT = 2 };
+
+/* For a node that faces one way along the ray: skip it when that side is
+ * not accepted; when it is a level-of-detail candidate, hit its disk. */
+static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, int lod, counters *c)
+{
+    const sg_stree_bundle *B = &h->tree.bundles[k / W];
+    const int l = (int)(k % W);
+    if (B->sin_cone[l] == 255)
+        return NODE_OPEN;
+    sg_vec3 n = sg_stree_normal(B, l);
+    float dn = n.x * r->d[0] + n.y * r->d[1] + n.z * r->d[2];
+    if (!(fabsf(dn) > (float)B->sin_cone[l] * (1.0f / 255.0f) + CONE_MARGIN))
+        return NODE_OPEN; /* a silhouette may cross it */
+    const int front = dn < 0.0f;
+    if (front ? !r->accept_front : !r->accept_back) {
+        c->culled++;
+        return NODE_SKIP;
+    }
+    if (!lod)
+        return NODE_OPEN;
+    c->lod_tests++;
+    const float R = B->r[l];
+    const float cx = B->cx[l], cy = B->cy[l], cz = B->cz[l];
+    const float off = (float)B->offset[l] * (1.0f / 127.0f) * R;
+    /* Plane through centre + off n: t = ((c + off n - o) . n) / (d . n). */
+    float num = (cx - r->o[0]) * n.x + (cy - r->o[1]) * n.y + (cz - r->o[2]) * n.z + off;
+    float t = num / dn;
+    if (!(t >= r->tmin) || !better(t, ((uint64_t)1 << 32) | k, bst))
+        return NODE_OPEN;
+    float px = r->o[0] + t * r->d[0] - cx, py = r->o[1] + t * r->d[1] - cy, pz = r->o[2] + t * r->d[2] - cz;
+    if (!(px * px + py * py + pz * pz <= R * R))
+        return NODE_OPEN; /* beside the disk: look at what is really there */
+    if (sg_ray_is_self(r->ray, t, n))
+        return NODE_OPEN;
+    bst->t = t;
+    bst->key = ((uint64_t)1 << 32) | k;
+    bst->b1 = bst->b2 = 0.0f;
+    bst->front = front;
+    return NODE_HIT;
+}
+
+/* Unit geometric normal of leaf-order triangle i. */
+static sg_vec3 tri_normal(const sg_hybrid *h, uint32_t i)
+{
+    const uint32_t *v = h->tri + 3 * (size_t)i;
+    const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
+    sg_vec3 e1 = sg_v3(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    sg_vec3 e2 = sg_v3(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
+    return sg_v3_normalize(sg_v3_cross(e1, e2));
+}
+
+/* Tests the triangles of a leaf word, four at a time; returns 1 when one
+ * became the best (any-hit callers stop there). Lanes are taken in leaf
+ * order, so ties resolve as one at a time would. */
+static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, counters *c)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    int found = 0;
+    c->triangles += count;
+    for (uint32_t g = first; g < first + count; g += 4) {
+        const uint32_t n = first + count - g < 4 ? first + count - g : 4;
+        sg_tri4 t4;
+        for (uint32_t l = 0; l < 4; ++l) {
+            const uint32_t *v = h->tri + 3 * (size_t)(g + (l < n ? l : 0));
+            sg_tri4_gather(&t4, (int)l, &r->tr, h->pos + 3 * (size_t)v[0], h->pos + 3 * (size_t)v[1],
+                           h->pos + 3 * (size_t)v[2]);
+        }
+        sg_tri4_hit th;
+#ifdef EXPERIMENT_SCALAR_TRI
+        unsigned mask = sg_tri_intersect4_scalar(&r->tr, &t4, (1u << n) - 1u, r->tmin, bst->t, &th);
+#else
+        unsigned mask = sg_tri_intersect4(&r->tr, &t4, (1u << n) - 1u, r->tmin, bst->t, &th);
+#endif
+        for (uint32_t l = 0; mask; ++l, mask >>= 1) {
+            if (!(mask & 1u))
+                continue;
+            const uint32_t i = g + l;
+            const int front = (int)(th.front >> l & 1u);
+            const float t = th.t[l];
+            if (front ? !r->accept_front : !r->accept_back)
+                continue;
+            if (!better(t, i, bst))
+                continue;
+            if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
+                continue;
+            bst->t = t;
+            bst->key = i;
+            bst->b1 = th.b1[l];
+            bst->b2 = th.b2[l];
+            bst->front = front;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+/* Children of bundle cb hit by the ray, nearest last (stack order). */
+static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, float tfar, entry *out, counters *c)
+{
+    float tin[W];
+    unsigned lod;
+    unsigned mask = sg_bundle_test(&h->tree.bundles[cb], &r->br, tfar, tin, &lod);
+    c->spheres += W;
+    int n = 0;
+    for (int l = 0; l < W; ++l) {
+        if (!(mask >> l & 1u))
+            continue;
+        entry e = {tin[l], (cb * (uint32_t)W + (uint32_t)l) | ((lod >> l & 1u) ? LOD_BIT : 0u)};
+        /* Insertion by descending t; equal t keeps lane order reversed, so
+         * the lower lane is popped first (deterministic either way). */
+        int j = n++;
+        while (j > 0 && out[j - 1].t < e.t) {
+            out[j] = out[j - 1];
+            --j;
+        }
+        out[j] = e;
+    }
+    return n;
+}
+
+/* Processes a popped node: returns 1 if the ray found a new best (any-hit
+ * callers stop there), and appends the children to visit to kids[]. */
+static int visit(const sg_hybrid *h, entry e, const tray *r, best *bst, entry *kids, int *nkids, counters *c)
+{
+    const uint32_t k = e.id & ~LOD_BIT;
+    *nkids = 0;
+    c->pops++;
+    if ((e.id & LOD_BIT) || r->cull) {
+        int what = node_point(h, k, r, bst, (e.id & LOD_BIT) != 0, c);
+        if (what == NODE_SKIP)
+            return 0;
+        if (what == NODE_HIT)
+            return 1;
+    }
+    const uint32_t word = h->tree.bundles[k / W].child[k % W];
+    if (sg_stree_is_leaf(word))
+        return test_leaf(h, word, r, bst, c);
+    *nkids = push_children(h, word, r, bst->t, kids, c);
+    return 0;
+}
+
+static void trace_stack(const sg_hybrid *h, const tray *r, best *bst, counters *c)
+{
+    entry stack[STACK_CAP];
+    int sp = push_children(h, 0, r, bst->t, stack, c);
+    while (sp > 0) {
+        entry e = stack[--sp];
+        if (e.t > bst->t)
+            continue;
+        int n;
+        visit(h, e, r, bst, stack + sp, &n, c);
+        sp += n;
+    }
+}
+
+/* Min-heap on (t, id). */
+static int heap_less(entry a, entry b) { return a.t < b.t || (a.t == b.t && a.id < b.id); }
+
+static void heap_push(entry *hp, int *n, entry e)
+{
+    int i = (*n)++;
+    while (i > 0) {
+        int p = (i - 1) / 2;
+        if (!heap_less(e, hp[p]))
+            break;
+        hp[i] = hp[p];
+        i = p;
+    }
+    hp[i] = e;
+}
+
+static entry heap_pop(entry *hp, int *n)
+{
+    entry top = hp[0], last = hp[--*n];
+    int i = 0;
+    for (;;) {
+        int l = 2 * i + 1;
+        if (l >= *n)
+            break;
+        int m = l + 1 < *n && heap_less(hp[l + 1], hp[l]) ? l + 1 : l;
+        if (!heap_less(hp[m], last))
+            break;
+        hp[i] = hp[m];
+        i = m;
+    }
+    if (*n > 0)
+        hp[i] = last;
+    return top;
+}
+
+/* Returns 0 when the heap would overflow (the caller traces again with the
+ * stack). */
+static int trace_heap(const sg_hybrid *h, const tray *r, best *bst, counters *c)
+{
+    entry heap[HEAP_CAP], kids[W];
+    int n = 0;
+    int nk = push_children(h, 0, r, bst->t, kids, c);
+    for (int i = 0; i < nk; ++i)
+        heap_push(heap, &n, kids[i]);
+    while (n > 0) {
+        entry e = heap_pop(heap, &n);
+        if (e.t > bst->t)
+            break; /* every other sphere starts even later */
+        visit(h, e, r, bst, kids, &nk, c);
+        if (n + nk > HEAP_CAP)
+            return 0;
+        for (int i = 0; i < nk; ++i)
+            heap_push(heap, &n, kids[i]);
+    }
+    return 1;
+}
+
+static void miss(sg_hybrid_hit *hit)
+{
+    memset(hit, 0, sizeof *hit);
+    hit->t = INFINITY;
+    hit->triangle = hit->node = SG_INVALID_ID;
+    hit->vertex[0] = hit->vertex[1] = hit->vertex[2] = SG_INVALID_ID;
+}
+
+static void add_stats(sg_hybrid_stats *s, const counters *c, int hit, int lod_hit, int overflow)
+{
+    if (!s)
+        return;
+    s->rays++;
+    s->pops += c->pops;
+    s->spheres += c->spheres;
+    s->triangles += c->triangles;
+    s->lod_tests += c->lod_tests;
+    s->culled += c->culled;
+    s->hits += (uint64_t)hit;
+    s->lod_hits += (uint64_t)lod_hit;
+    s->heap_overflows += (uint64_t)overflow;
+}
+
+int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_hit *hit,
+                        sg_hybrid_stats *stats)
+{
+    tray r;
+    counters c = {0};
+    miss(hit);
+    if (!setup(h, ray, fp, &r)) {
+        add_stats(stats, &c, 0, 0, 0);
+        return 0;
+    }
+    best bst = {.t = ray->tmax, .key = UINT64_MAX};
+    int overflow = 0;
+    if (h->desc.traversal == SG_HYBRID_TRAVERSE_HEAP) {
+        if (!trace_heap(h, &r, &bst, &c)) {
+            overflow = 1;
+            bst = (best){.t = ray->tmax, .key = UINT64_MAX};
+            trace_stack(h, &r, &bst, &c);
+        }
+    } else {
+        trace_stack(h, &r, &bst, &c);
+    }
+    if (bst.key == UINT64_MAX) {
+        add_stats(stats, &c, 0, 0, overflow);
+        return 0;
+    }
+    hit->t = bst.t;
+    hit->back = !bst.front;
+    if (bst.key >> 32) {
+        const uint32_t k = (uint32_t)bst.key;
+        const sg_stree_bundle *B = &h->tree.bundles[k / W];
+        sg_vec3 n = sg_stree_normal(B, (int)(k % W));
+        hit->node = k;
+        hit->p = sg_v3_madd(ray->org, ray->dir, bst.t);
+        hit->ng = hit->ns = n;
+        add_stats(stats, &c, 1, 1, overflow);
+        return 1;
+    }
+    const uint32_t i = (uint32_t)bst.key;
+    const uint32_t *v = h->tri + 3 * (size_t)i;
+    const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *cc = h->pos + 3 * (size_t)v[2];
+    const float b0 = 1.0f - bst.b1 - bst.b2;
+    hit->triangle = h->tri_id[i];
+    hit->vertex[0] = v[0];
+    hit->vertex[1] = v[1];
+    hit->vertex[2] = v[2];
+    hit->b1 = bst.b1;
+    hit->b2 = bst.b2;
+    hit->p = sg_v3(b0 * a[0] + bst.b1 * b[0] + bst.b2 * cc[0], b0 * a[1] + bst.b1 * b[1] + bst.b2 * cc[1],
+                   b0 * a[2] + bst.b1 * b[2] + bst.b2 * cc[2]);
+    hit->ng = tri_normal(h, i);
+    if (h->vnormal) {
+        sg_vec3 n0 = sg_oct_decode(h->vnormal[v[0]]), n1 = sg_oct_decode(h->vnormal[v[1]]);
+        sg_vec3 n2 = sg_oct_decode(h->vnormal[v[2]]);
+        sg_vec3 ns = sg_v3_normalize(sg_v3_add(sg_v3_add(sg_v3_scale(n0, b0), sg_v3_scale(n1, bst.b1)),
+                                               sg_v3_scale(n2, bst.b2)));
+        hit->ns = ns.x == 0.0f && ns.y == 0.0f && ns.z == 0.0f ? hit->ng : ns;
+    } else {
+        hit->ns = hit->ng;
+    }
+    add_stats(stats, &c, 1, 0, overflow);
+    return 1;
+}
+
+int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats)
+{
+    tray r;
+    counters c = {0};
+    if (!setup(h, ray, fp, &r)) {
+        add_stats(stats, &c, 0, 0, 0);
+        return 0;
+    }
+    best bst = {.t = ray->tmax, .key = UINT64_MAX};
+    entry stack[STACK_CAP];
+    int sp = push_children(h, 0, &r, bst.t, stack, &c), found = 0;
+    while (sp > 0 && !found) {
+        entry e = stack[--sp];
+        int n;
+        found = visit(h, e, &r, &bst, stack + sp, &n, &c);
+        sp += n;
+    }
+    add_stats(stats, &c, found, 0, 0);
+    return found;
+}
