@@ -77,7 +77,7 @@ static const char usage[] =
     "  --views LIST      whole,closeup (default both)\n"
     "  --frames N        timed frames per row, best reported (default 5)\n"
     "  --threads N       OpenMP threads for builds and frames (default: all)\n"
-    "  --leaf-max N      triangles per leaf, 1..8 (default 4)\n"
+    "  --leaf-max N      triangles per leaf, 1..8 (default 8)\n"
     "  --no-heap         skip the heap traversal rows\n"
     "  --quick           smoke test: dragon_vrip_res3 (45k triangles), split 2, 2 frames\n"
     "  --csv PATH        write the rows as CSV\n"

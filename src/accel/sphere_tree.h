@@ -109,7 +109,7 @@ typedef struct sg_stree_desc {
     size_t triangle_count;      /* >= 1, <= SG_STREE_MAX_TRIANGLES          */
     const uint32_t *triangles;  /* 3 vertex ids per triangle                */
     const float *colors;        /* 3 per vertex, or NULL                     */
-    int leaf_max;               /* triangles per leaf, 1..SG_STREE_MAX_LEAF; default 4 */
+    int leaf_max;               /* triangles per leaf, 1..SG_STREE_MAX_LEAF; default 8 */
     int threads;                /* build threads; 0 = OpenMP default         */
 } sg_stree_desc;
 

@@ -190,7 +190,7 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
     if (d.traversal != SG_HYBRID_TRAVERSE_STACK && d.traversal != SG_HYBRID_TRAVERSE_HEAP)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown traversal %d", name, (int)d.traversal);
     if (d.leaf_max == 0)
-        d.leaf_max = 4;
+        d.leaf_max = 8; /* 4 traced 2.5% faster for 33% more memory (docs/hybrid.md) */
     if (d.leaf_max < 1 || d.leaf_max > SG_STREE_MAX_LEAF)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: leaf_max %d is outside 1..%d", name, d.leaf_max,
                             SG_STREE_MAX_LEAF);

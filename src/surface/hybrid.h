@@ -93,7 +93,7 @@ typedef enum sg_hybrid_traversal {
 typedef struct sg_hybrid_desc {
     uint32_t flags;                /* sg_hybrid_flags; default 0                    */
     sg_hybrid_traversal traversal; /* default SG_HYBRID_TRAVERSE_STACK              */
-    int leaf_max;                  /* triangles per leaf, 1..8; default 4           */
+    int leaf_max;                  /* triangles per leaf, 1..8; default 8           */
     int threads;                   /* build threads; 0 = OpenMP default             */
     const char *name;              /* names the mesh in messages (a file path);
                                       default "mesh"                              */
