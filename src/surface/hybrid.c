@@ -196,13 +196,12 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
                             SG_STREE_MAX_LEAF);
     if (d.threads < 0)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: threads %d is negative", name, d.threads);
-    d.name = NULL;
-
     uint32_t *traced = NULL, *ctri = NULL;
     size_t count = 0;
-    sg_status st = check_mesh(&d, mesh, &traced, &count, err);
+    sg_status st = check_mesh(&d, mesh, &traced, &count, err); /* messages name d.name */
     if (st != SG_OK)
         return st;
+    d.name = NULL; /* not kept: the caller's string may not outlive the call */
     sg_hybrid *h = sg_calloc_array(1, sizeof *h);
     if (!h) {
         sg_free(traced);
@@ -339,6 +338,13 @@ int sg_hybrid_site(const sg_hybrid *h, uint32_t id, sg_vec3 *pos, sg_vec3 *norma
     *pos = disk;
     *normal = n;
     return 1;
+}
+
+float sg_hybrid_node_radius(const sg_hybrid *h, uint32_t node)
+{
+    float r;
+    sg_vec3 c, n, disk;
+    return node_geometry(h, node, &r, &c, &n, &disk) ? r : 0.0f;
 }
 
 int sg_hybrid_hit_sites(const sg_hybrid *h, const sg_hybrid_hit *hit, uint32_t *ids, float *weights, int max)

@@ -254,6 +254,11 @@ size_t sg_hybrid_site_count(const sg_hybrid *h);
  * Returns 0 for an id out of range or an empty node slot. */
 int sg_hybrid_site(const sg_hybrid *h, uint32_t id, sg_vec3 *pos, sg_vec3 *normal);
 
+/* Radius of node `node`'s bounding sphere (its disk's radius as a point,
+ * and its reach as a light site); 0 for an id out of range or an empty
+ * slot. */
+float sg_hybrid_node_radius(const sg_hybrid *h, uint32_t node);
+
 /* Colour at a hit: the vertex colours interpolated, or the node's
  * area-weighted mean. Returns 0 (and leaves *rgb) when the mesh had no
  * colours or the hit is a miss. */

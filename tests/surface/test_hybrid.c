@@ -1,0 +1,629 @@
+/* test_hybrid.c — the hybrid point/triangle hierarchy (surface/hybrid.h,
+ * Ye 2005): exact triangle hits, level of detail, determinism, bad meshes.
+ *
+ *  1. hybrid::watertight_plane     rays straight down and oblique through
+ *                                  every vertex and edge of a gridded plane
+ *                                  (exact float coordinates) all hit it.
+ *  2. hybrid::watertight_sphere    rays through every vertex, edge midpoint
+ *                                  and edge third of a closed sphere mesh
+ *                                  (pole fans included) all hit it.
+ *  3. hybrid::lod_zero_is_full     a frame at lod 0 and at lod 1e-6 equals
+ *                                  the full-detail frame bit for bit (and
+ *                                  lod 2 does change it: LOD is live).
+ *  4. hybrid::lod_error_bound      per pixel, a LOD hit lies within lod
+ *                                  footprints of the exact one; the frame's
+ *                                  error shrinks with the threshold.
+ *  5. hybrid::threads_identical    1 and 2 build threads: same layout hash,
+ *                                  same frame bit for bit.
+ *  6. hybrid::no_self_hits         rays spawned outwards from hits on a
+ *                                  convex mesh (triangle and LOD hits) meet
+ *                                  nothing; inwards they meet the far side.
+ *  7. hybrid::hit_sites            weights sum to 1, are the barycentrics,
+ *                                  and agree on both sides of an edge.
+ *  8. hybrid::bad_meshes           0 triangles, all degenerate, index out of
+ *                                  range, NaN position: INVALID_ARG naming
+ *                                  the element; some degenerate: counted and
+ *                                  never hit; a non-manifold edge (three
+ *                                  triangles) is traced, and rays through it
+ *                                  hit.
+ *  9. hybrid::kernels_agree      the SIMD triangle and sphere-bundle tests
+ *                                  equal their scalar references bit for bit
+ *                                  on random rays (exact-zero edge functions
+ *                                  and point-sized lanes included).
+ */
+#include "test_support.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "points/mesh_shapes.h"
+#include "accel/sphere_bundle.h"
+#include "math/triangle.h"
+#include "surface/hybrid.h"
+#include "surface/hybrid_int.h" /* the bundles, for the kernel comparison */
+
+static sg_hybrid *build(const sg_mesh *m, int threads)
+{
+    sg_hybrid_desc d = {.threads = threads, .name = "test mesh"};
+    sg_hybrid *h = NULL;
+    sg_error err = {0};
+    if (sg_hybrid_create(&d, m, &h, &err) != SG_OK)
+        fail_msg("sg_hybrid_create: %s", err.message);
+    return h;
+}
+
+static sg_mesh sphere_mesh(int rings, int segments)
+{
+    sg_mesh m;
+    sg_error err = {0};
+    if (sg_mesh_make_sphere(rings, segments, sg_v3(0, 0, 0), 1.0f, &m, &err) != SG_OK)
+        fail_msg("sg_mesh_make_sphere: %s", err.message);
+    return m;
+}
+
+static sg_vec3 vtx(const sg_mesh *m, uint32_t i)
+{
+    return sg_v3(m->positions[3 * (size_t)i], m->positions[3 * (size_t)i + 1], m->positions[3 * (size_t)i + 2]);
+}
+
+static sg_ray ray_to(sg_vec3 org, sg_vec3 target)
+{
+    return (sg_ray){.org = org, .dir = sg_v3_normalize(sg_v3_sub(target, org)), .tmin = 0.0f, .tmax = INFINITY};
+}
+
+/* ---- 1-2: watertight ------------------------------------------------------ */
+
+static void test_hybrid_watertight_plane(void **state)
+{
+    (void)state;
+    /* side 16 on half 8: vertices at the integers, every coordinate exact. */
+    sg_mesh m;
+    assert_int_equal(sg_mesh_make_plane(16, 8.0f, &m, NULL), SG_OK);
+    sg_hybrid *h = build(&m, 0);
+    /* Targets: every vertex, every edge's midpoint (axis edges and
+     * diagonals), all exact in float. Directions: straight down, and
+     * oblique with dyadic components so the origin is exact too. */
+    const sg_vec3 offs[3] = {{0, 4, 0}, {1, 4, 0.5f}, {-0.25f, 2, 0.75f}};
+    size_t rays = 0, missed = 0;
+    /* Shared edges and vertices only: the interior (a ray through the
+     * mesh's outer rim may pass just outside it after rounding). */
+    for (int i = -7; i <= 7; ++i)
+        for (int j = -7; j <= 7; ++j)
+            for (int e = 0; e < 4; ++e) {
+                /* e: the vertex, then midpoints towards +x, +z and of the cell's
+                 * diagonal (the edge between its two triangles) */
+                float x = (float)j + (e == 1 || e == 3 ? 0.5f : 0.0f), z = (float)i + (e >= 2 ? 0.5f : 0.0f);
+                if (x >= 8.0f || z >= 8.0f)
+                    continue;
+                for (int o = 0; o < 3; ++o) {
+                    sg_vec3 p = sg_v3(x, 0.0f, z);
+                    sg_ray r = ray_to(sg_v3_add(p, offs[o]), p);
+                    sg_hybrid_hit hit;
+                    ++rays;
+                    if (!sg_hybrid_intersect(h, &r, NULL, &hit, NULL)) {
+                        if (missed++ < 5)
+                            print_error("missed: target (%g, 0, %g) from offset %d\n", (double)x, (double)z, o);
+                        continue;
+                    }
+                    /* The hit lies on the target up to the rounding of the
+                     * normalised direction (t ~ 4, 1 ulp of dir ~ 6e-8). */
+                    assert_true(sg_v3_length(sg_v3_sub(hit.p, p)) < 1e-5f);
+                }
+            }
+    if (missed)
+        fail_msg("%zu of %zu rays through vertices and edges of the plane missed", missed, rays);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+static void test_hybrid_watertight_sphere(void **state)
+{
+    (void)state;
+    sg_mesh m = sphere_mesh(12, 20);
+    sg_hybrid *h = build(&m, 0);
+    uint64_t rng = 15;
+    size_t rays = 0, missed = 0;
+    for (size_t t = 0; t < m.triangle_count; ++t)
+        for (int e = 0; e < 3; ++e) {
+            sg_vec3 a = vtx(&m, m.triangles[3 * t + e]), b = vtx(&m, m.triangles[3 * t + (e + 1) % 3]);
+            const float s[3] = {0.0f, 0.5f, 1.0f / 3.0f}; /* the vertex, the midpoint, a third */
+            for (int k = 0; k < 3; ++k) {
+                sg_vec3 p = sg_v3_add(a, sg_v3_scale(sg_v3_sub(b, a), s[k]));
+                /* From outside, within 60 degrees of the outward direction. */
+                sg_vec3 j = sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f,
+                                  sg_test_rand01(&rng) - 0.5f);
+                sg_vec3 org = sg_v3_add(sg_v3_scale(sg_v3_normalize(p), 3.0f), sg_v3_scale(j, 2.0f));
+                sg_ray r = ray_to(org, p);
+                sg_hybrid_hit hit;
+                ++rays;
+                if (!sg_hybrid_intersect(h, &r, NULL, &hit, NULL) || hit.back) {
+                    if (missed++ < 5)
+                        print_error("missed: triangle %zu edge %d at %g\n", t, e, (double)s[k]);
+                    continue;
+                }
+                /* Convex: the first crossing is the target itself (rounding
+                 * of p and of dir over t ~ 3: well below 1e-5). */
+                assert_true(sg_v3_length(sg_v3_sub(hit.p, p)) < 1e-5f);
+            }
+        }
+    if (missed)
+        fail_msg("%zu of %zu rays through vertices and edges of the sphere missed", missed, rays);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+/* ---- 3-5: frames, level of detail ---------------------------------------- */
+
+enum { FRAME = 96 };
+static const float TAN_HALF = 0.45f;
+static const sg_vec3 EYE = {0.3f, 0.5f, 3.5f};
+
+static sg_ray camera_ray(int x, int y)
+{
+    float u = TAN_HALF * (2.0f * ((float)x + 0.5f) / FRAME - 1.0f);
+    float v = TAN_HALF * (1.0f - 2.0f * ((float)y + 0.5f) / FRAME);
+    sg_vec3 d = sg_v3_normalize(sg_v3(u, v, -1.0f));
+    return (sg_ray){.org = EYE, .dir = d, .tmin = 0.0f, .tmax = INFINITY};
+}
+
+/* The frame's hits (FRAME^2), traced on `threads` threads; lod < 0: no
+ * footprint at all. Returns the number of LOD hits. */
+static uint64_t frame(const sg_hybrid *h, float lod, int threads, sg_hybrid_hit *hits)
+{
+    sg_footprint fp = sg_footprint_pinhole(TAN_HALF, FRAME, lod);
+    uint64_t lod_hits = 0;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) reduction(+ : lod_hits)
+    for (int y = 0; y < FRAME; ++y)
+        for (int x = 0; x < FRAME; ++x) {
+            sg_ray r = camera_ray(x, y);
+            sg_hybrid_hit *hit = &hits[y * FRAME + x];
+            sg_hybrid_intersect(h, &r, lod < 0.0f ? NULL : &fp, hit, NULL);
+            lod_hits += hit->node != SG_INVALID_ID;
+        }
+    return lod_hits;
+}
+
+/* Bitwise comparison of the fields a hit defines. */
+static int same_hit(const sg_hybrid_hit *a, const sg_hybrid_hit *b)
+{
+    return memcmp(&a->t, &b->t, sizeof a->t) == 0 && memcmp(&a->p, &b->p, sizeof a->p) == 0 &&
+           memcmp(&a->ns, &b->ns, sizeof a->ns) == 0 && memcmp(&a->ng, &b->ng, sizeof a->ng) == 0 &&
+           a->triangle == b->triangle && a->node == b->node && memcmp(&a->b1, &b->b1, sizeof a->b1) == 0 &&
+           memcmp(&a->b2, &b->b2, sizeof a->b2) == 0 && a->back == b->back;
+}
+
+static size_t count_different(const sg_hybrid_hit *a, const sg_hybrid_hit *b)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < (size_t)FRAME * FRAME; ++i)
+        n += !same_hit(&a[i], &b[i]);
+    return n;
+}
+
+/* A sphere fine enough that its nodes fall below a pixel: 64k triangles,
+ * edges of ~0.025 at distance ~3.5, where a pixel is 2 * 0.45 / 96 * 3.5
+ * = 0.033 wide. */
+static sg_mesh fine_sphere(void) { return sphere_mesh(128, 256); }
+
+static void test_hybrid_lod_zero_is_full(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_hybrid *h = build(&m, 0);
+    sg_hybrid_hit *full = sg_alloc_array(FRAME * FRAME, sizeof *full);
+    sg_hybrid_hit *lod = sg_alloc_array(FRAME * FRAME, sizeof *lod);
+    assert_non_null(full);
+    assert_non_null(lod);
+    frame(h, -1.0f, 2, full);
+    const float zero_like[2] = {0.0f, 1e-6f};
+    for (int k = 0; k < 2; ++k) {
+        uint64_t lod_hits = frame(h, zero_like[k], 2, lod);
+        size_t diff = count_different(full, lod);
+        if (lod_hits || diff)
+            fail_msg("lod %g: %llu LOD hits, %zu of %d pixels differ from full detail", (double)zero_like[k],
+                     (unsigned long long)lod_hits, diff, FRAME * FRAME);
+    }
+    /* The same frame at lod 2 must differ, or the test above proves nothing. */
+    uint64_t lod_hits = frame(h, 2.0f, 2, lod);
+    if (lod_hits == 0 || count_different(full, lod) == 0)
+        fail_msg("lod 2 changed nothing (%llu LOD hits): the footprint is not in effect",
+                 (unsigned long long)lod_hits);
+    sg_free(full);
+    sg_free(lod);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+static void test_hybrid_lod_error_bound(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_hybrid *h = build(&m, 0);
+    sg_hybrid_hit *full = sg_alloc_array(FRAME * FRAME, sizeof *full);
+    sg_hybrid_hit *lod = sg_alloc_array(FRAME * FRAME, sizeof *lod);
+    assert_non_null(full);
+    assert_non_null(lod);
+    frame(h, -1.0f, 2, full);
+    const float spread = 2.0f * TAN_HALF / FRAME;
+    const float thresholds[4] = {4.0f, 2.0f, 1.0f, 0.5f};
+    double prev_mean = INFINITY;
+    for (int k = 0; k < 4; ++k) {
+        const float L = thresholds[k];
+        uint64_t lod_hits = frame(h, L, 2, lod);
+        double sum = 0.0, worst = 0.0;
+        size_t coverage_diff = 0, far_from_outline = 0, too_large = 0;
+        for (int y = 0; y < FRAME; ++y)
+            for (int x = 0; x < FRAME; ++x) {
+                size_t i = (size_t)y * FRAME + x;
+                int a = full[i].triangle != SG_INVALID_ID, b = lod[i].node != SG_INVALID_ID || lod[i].triangle != SG_INVALID_ID;
+                if (a != b) {
+                    /* A disk lies in its node's sphere, under L footprints
+                     * across, so it can change coverage only within L
+                     * pixels of the exact outline: some pixel that near
+                     * has the other full-detail coverage. */
+                    ++coverage_diff;
+                    int reach = (int)ceilf(L), near = 0;
+                    for (int dy = -reach; dy <= reach && !near; ++dy)
+                        for (int dx = -reach; dx <= reach && !near; ++dx) {
+                            int yy = y + dy, xx = x + dx;
+                            if (yy >= 0 && yy < FRAME && xx >= 0 && xx < FRAME)
+                                near = (full[(size_t)yy * FRAME + xx].triangle != SG_INVALID_ID) != a;
+                        }
+                    far_from_outline += !near;
+                    continue;
+                }
+                if (!a)
+                    continue;
+                if (lod[i].node != SG_INVALID_ID) {
+                    /* The criterion itself: 2R < L spread b, b the centre's
+                     * distance along the ray, within R of the hit's t. */
+                    float R = sg_hybrid_node_radius(h, lod[i].node);
+                    too_large += !(R > 0.0f && 2.0f * R < L * spread * (lod[i].t + R));
+                }
+                /* A node is hit as a disk only when its diameter 2R is below L
+                 * footprints w(b) = spread * b, b its centre's distance along
+                 * the ray; the disk and the node's triangles lie in its
+                 * sphere, and on a convex mesh the exact hit of a ray through
+                 * the disk is on those triangles or a neighbour's within the
+                 * same sphere: |p_lod - p_full| <= 2R < L w(b), and b is within
+                 * R of t. The error in footprints is therefore below L. */
+                double e = sg_v3_length(sg_v3_sub(lod[i].p, full[i].p)) / (spread * full[i].t);
+                sum += e;
+                if (e > worst)
+                    worst = e;
+            }
+        double mean = sum / (double)(FRAME * FRAME);
+        print_message("lod %g: %llu LOD hits, mean error %.4f, worst %.4f footprints, %zu coverage changes\n",
+                      (double)L, (unsigned long long)lod_hits, mean, worst, coverage_diff);
+        if (!(worst < L) || far_from_outline || too_large)
+            fail_msg("lod %g: worst error %g footprints (bound %g), %zu of %zu coverage changes away from the "
+                     "outline, %zu nodes hit above the threshold", (double)L, worst, (double)L, far_from_outline,
+                     coverage_diff, too_large);
+        /* Shrinks with the threshold: each halving of L leaves no more error. */
+        if (!(mean <= prev_mean))
+            fail_msg("lod %g: mean error %g above %g at twice the threshold", (double)L, mean, prev_mean);
+        prev_mean = mean;
+    }
+    sg_free(full);
+    sg_free(lod);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+static void test_hybrid_threads_identical(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_hybrid *h1 = build(&m, 1), *h2 = build(&m, 2);
+    uint64_t a = sg_hybrid_layout_hash(h1), b = sg_hybrid_layout_hash(h2);
+    if (a != b)
+        fail_msg("layout hash: 1 thread %016llx, 2 threads %016llx", (unsigned long long)a, (unsigned long long)b);
+    sg_hybrid_hit *f1 = sg_alloc_array(FRAME * FRAME, sizeof *f1);
+    sg_hybrid_hit *f2 = sg_alloc_array(FRAME * FRAME, sizeof *f2);
+    assert_non_null(f1);
+    assert_non_null(f2);
+    frame(h1, 1.0f, 1, f1);
+    frame(h2, 1.0f, 2, f2);
+    size_t diff = count_different(f1, f2);
+    if (diff)
+        fail_msg("%zu pixels differ between 1 and 2 threads", diff);
+    sg_free(f1);
+    sg_free(f2);
+    sg_hybrid_destroy(h1);
+    sg_hybrid_destroy(h2);
+    sg_mesh_free(&m);
+}
+
+/* ---- 6-7: spawned rays, sites --------------------------------------------- */
+
+static sg_vec3 random_dir(uint64_t *rng)
+{
+    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 6.2831853f * sg_test_rand01(rng);
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    return sg_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+static void test_hybrid_no_self_hits(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_hybrid *h = build(&m, 0);
+    sg_footprint fp = sg_footprint_pinhole(TAN_HALF, FRAME, 2.0f);
+    uint64_t rng = 7;
+    size_t hits = 0, lod_hits = 0, self = 0, through = 0;
+    for (int y = 0; y < FRAME; y += 3)
+        for (int x = 0; x < FRAME; x += 3) {
+            sg_ray r = camera_ray(x, y);
+            sg_hybrid_hit hit;
+            if (!sg_hybrid_intersect(h, &r, (x + y) % 2 ? &fp : NULL, &hit, NULL))
+                continue;
+            ++hits;
+            lod_hits += hit.node != SG_INVALID_ID;
+            for (int k = 0; k < 8; ++k) {
+                sg_vec3 d = random_dir(&rng);
+                int out = sg_v3_dot(d, hit.ng) > 0.0f;
+                sg_ray s = sg_hybrid_spawn_ray(h, &hit, d, INFINITY);
+                sg_hybrid_hit sh;
+                int got = sg_hybrid_intersect(h, &s, NULL, &sh, NULL);
+                if (out && got) {
+                    if (self++ < 5)
+                        print_error("outward ray from (%g %g %g) hit at t = %g\n", (double)hit.p.x,
+                                    (double)hit.p.y, (double)hit.p.z, (double)sh.t);
+                } else if (!out && hit.node == SG_INVALID_ID && (!got || !(sh.t > 1e-5f))) {
+                    /* Inward from a triangle: the far side. A hit on the
+                     * ray's own triangle would lie at t ~ rounding (1e-7);
+                     * a real chord under 1e-5 needs a start within 1e-5 of
+                     * an edge and a direction within the 1.4 degree
+                     * dihedral angle of it, odds ~1e-5 per ray. (A LOD hit
+                     * lies on a disk up to R off the facets, so an inward
+                     * ray from it may graze past the sphere: not checked.) */
+                    if (through++ < 5)
+                        print_error("inward ray from (%g %g %g): hit %d at t = %g\n", (double)hit.p.x,
+                                    (double)hit.p.y, (double)hit.p.z, got, (double)sh.t);
+                }
+            }
+        }
+    assert_true(hits > 200); /* the sphere covers ~1/3 of the 32 x 32 rays */
+    assert_true(lod_hits > 0);
+    if (self || through)
+        fail_msg("%zu outward rays hit the sphere, %zu inward rays missed its far side (%zu hits)", self, through,
+                 hits);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+static void test_hybrid_hit_sites(void **state)
+{
+    (void)state;
+    sg_mesh m;
+    assert_int_equal(sg_mesh_make_plane(1, 1.0f, &m, NULL), SG_OK);
+    sg_hybrid *h = build(&m, 0);
+    /* The diagonal x + z = 0 of the square [-1, 1]^2 splits it into two
+     * triangles (mesh_shapes.c); rays just either side of it. */
+    const float eps = 1e-4f;
+    sg_hybrid_hit a, b;
+    sg_ray ra = ray_to(sg_v3(0.3f + eps, 2, -0.3f + eps), sg_v3(0.3f + eps, 0, -0.3f + eps));
+    sg_ray rb = ray_to(sg_v3(0.3f - eps, 2, -0.3f - eps), sg_v3(0.3f - eps, 0, -0.3f - eps));
+    assert_true(sg_hybrid_intersect(h, &ra, NULL, &a, NULL));
+    assert_true(sg_hybrid_intersect(h, &rb, NULL, &b, NULL));
+    assert_int_not_equal(a.triangle, b.triangle);
+    uint32_t ia[3], ib[3];
+    float wa[3], wb[3];
+    assert_int_equal(sg_hybrid_hit_sites(h, &a, ia, wa, 3), 3);
+    assert_int_equal(sg_hybrid_hit_sites(h, &b, ib, wb, 3), 3);
+    /* Per vertex, the weight each side gives it: the two triangles share
+     * the diagonal's vertices, and the vertex off the diagonal weighs ~0.
+     * Weights are linear in position with gradient 1 / (cell side 2) per
+     * unit, so the two sides differ by at most 2 eps sqrt 2 / 2 < 4 eps. */
+    float per_vertex[2][4] = {{0}};
+    float sum_a = 0.0f, sum_b = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        assert_true(ia[k] < 4 && ib[k] < 4);
+        per_vertex[0][ia[k]] += wa[k];
+        per_vertex[1][ib[k]] += wb[k];
+        sum_a += wa[k];
+        sum_b += wb[k];
+    }
+    assert_float_equal(sum_a, 1.0f, 1e-6f);
+    assert_float_equal(sum_b, 1.0f, 1e-6f);
+    for (int v = 0; v < 4; ++v)
+        if (fabsf(per_vertex[0][v] - per_vertex[1][v]) > 4.0f * eps)
+            fail_msg("vertex %d: weight %g on one side of the edge, %g on the other", v, (double)per_vertex[0][v],
+                     (double)per_vertex[1][v]);
+    /* max 1: the largest weight alone, renormalised. */
+    assert_int_equal(sg_hybrid_hit_sites(h, &a, ia, wa, 1), 1);
+    assert_float_equal(wa[0], 1.0f, 0.0f);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+/* ---- 8: bad meshes ---------------------------------------------------------- */
+
+static sg_mesh raw_mesh(size_t nv, const float *pos, size_t nt, const uint32_t *tri)
+{
+    sg_mesh m = {.vertex_count = nv, .triangle_count = nt};
+    m.positions = sg_alloc_array(nv, 3 * sizeof(float));
+    assert_non_null(m.positions);
+    memcpy(m.positions, pos, nv * 3 * sizeof(float));
+    if (nt) {
+        m.triangles = sg_alloc_array(nt, 3 * sizeof(uint32_t));
+        assert_non_null(m.triangles);
+        memcpy(m.triangles, tri, nt * 3 * sizeof(uint32_t));
+    }
+    return m;
+}
+
+static void expect_error(const sg_mesh *m, sg_status want, const char *needle)
+{
+    sg_hybrid_desc d = {.name = "bad.ply"};
+    sg_hybrid *h = (sg_hybrid *)(uintptr_t)1; /* must stay untouched */
+    sg_error err = {0};
+    sg_status st = sg_hybrid_create(&d, m, &h, &err);
+    if (st != want || !strstr(err.message, needle) || !strstr(err.message, "bad.ply") ||
+        h != (sg_hybrid *)(uintptr_t)1)
+        fail_msg("status %d (want %d), message \"%s\" (want \"%s\")", (int)st, (int)want, err.message, needle);
+}
+
+static void test_hybrid_bad_meshes(void **state)
+{
+    (void)state;
+    const float quad[] = {0, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 1, 0.5f, 0, 0.5f};
+    {
+        sg_mesh m = raw_mesh(4, quad, 0, NULL);
+        expect_error(&m, SG_ERR_INVALID_ARG, "no triangles");
+        sg_mesh_free(&m);
+    }
+    {
+        const uint32_t t[] = {0, 1, 1, 2, 2, 2, 0, 4, 2}; /* repeated vertices; collinear (0, 4, 2) */
+        sg_mesh m = raw_mesh(5, quad, 3, t);
+        expect_error(&m, SG_ERR_INVALID_ARG, "all 3 triangles have zero area");
+        sg_mesh_free(&m);
+    }
+    {
+        const uint32_t t[] = {0, 3, 2, 0, 2, 7};
+        sg_mesh m = raw_mesh(5, quad, 2, t);
+        expect_error(&m, SG_ERR_INVALID_ARG, "triangle 1: vertex index 7 is out of range");
+        sg_mesh_free(&m);
+    }
+    {
+        const uint32_t t[] = {0, 3, 2};
+        sg_mesh m = raw_mesh(5, quad, 1, t);
+        m.positions[3 * 2 + 1] = NAN;
+        expect_error(&m, SG_ERR_INVALID_ARG, "vertex 2: position is not finite");
+        sg_mesh_free(&m);
+    }
+    {
+        /* Some degenerate: left out, counted, never hit. Triangle 1 is the
+         * collinear (0, 4, 2) along the quad's diagonal. */
+        const uint32_t t[] = {0, 3, 2, 0, 4, 2, 0, 2, 1};
+        sg_mesh m = raw_mesh(5, quad, 3, t);
+        sg_hybrid *h = build(&m, 0);
+        sg_hybrid_info info;
+        sg_hybrid_get_info(h, &info);
+        assert_int_equal(info.degenerate_count, 1);
+        assert_int_equal(info.triangle_count, 2);
+        for (int k = 0; k <= 10; ++k) {
+            float s = 0.1f * (float)k; /* along the diagonal, where the degenerate one lies */
+            sg_ray r = ray_to(sg_v3(s, 1, s), sg_v3(s, 0, s));
+            sg_hybrid_hit hit;
+            assert_true(sg_hybrid_intersect(h, &r, NULL, &hit, NULL));
+            assert_int_not_equal(hit.triangle, 1);
+        }
+        sg_hybrid_destroy(h);
+        sg_mesh_free(&m);
+    }
+    {
+        /* Non-manifold: three triangles on the edge (0,0,0)-(1,0,0), as
+         * fins at 0, 120 and 240 degrees about it. Traced as given: rays
+         * through the edge hit (one of them). */
+        const float fin[] = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -0.5f, 0.8660254f, 0.5f, -0.5f, -0.8660254f};
+        const uint32_t t[] = {0, 1, 2, 0, 1, 3, 0, 1, 4};
+        sg_mesh m = raw_mesh(5, fin, 3, t);
+        sg_hybrid *h = build(&m, 0);
+        for (int k = 1; k < 10; ++k) {
+            float x = 0.1f * (float)k;
+            sg_vec3 p = sg_v3(x, 0, 0);
+            const sg_vec3 from[3] = {{x, 0.3f, 2}, {x, 2, -0.3f}, {x, -1.5f, 0.1f}};
+            for (int f = 0; f < 3; ++f) {
+                sg_ray r = ray_to(from[f], p);
+                sg_hybrid_hit hit;
+                if (!sg_hybrid_intersect(h, &r, NULL, &hit, NULL))
+                    fail_msg("ray %d through the non-manifold edge at x = %g missed", f, (double)x);
+                assert_true(hit.triangle < 3);
+            }
+        }
+        sg_hybrid_destroy(h);
+        sg_mesh_free(&m);
+    }
+}
+
+/* ---- 9: SIMD kernels against their scalar references ------------------------ */
+
+static void test_hybrid_kernels_agree(void **state)
+{
+    (void)state;
+    uint64_t rng = 99;
+    /* Triangles: random, and some sharing vertices with the ray's origin
+     * axis so that edge functions come out exactly 0 (the fallback). */
+    size_t differ = 0, hits = 0;
+    for (int n = 0; n < 20000; ++n) {
+        float v[4][3][3];
+        for (int l = 0; l < 4; ++l)
+            for (int k = 0; k < 3; ++k)
+                for (int a = 0; a < 3; ++a)
+                    v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
+                                            : 4.0f * sg_test_rand01(&rng) - 2.0f;
+        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
+        sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
+                                                                        sg_test_rand01(&rng) - 0.5f, -1));
+        sg_tri_ray tr = sg_tri_ray_prepare(o, d);
+        sg_tri4 t4;
+        for (int l = 0; l < 4; ++l)
+            sg_tri4_gather(&t4, l, &tr, v[l][0], v[l][1], v[l][2]);
+        sg_tri4_hit a, b;
+        unsigned ma = sg_tri_intersect4(&tr, &t4, 15u, 0.0f, INFINITY, &a);
+        unsigned mb = sg_tri_intersect4_scalar(&tr, &t4, 15u, 0.0f, INFINITY, &b);
+        int same = ma == mb && (a.front & ma) == (b.front & mb);
+        for (int l = 0; l < 4 && same; ++l)
+            if (ma >> l & 1u)
+                same = memcmp(&a.t[l], &b.t[l], 4) == 0 && memcmp(&a.b1[l], &b.b1[l], 4) == 0 &&
+                       memcmp(&a.b2[l], &b.b2[l], 4) == 0;
+        differ += !same;
+        hits += (size_t)__builtin_popcount(ma);
+    }
+    if (differ)
+        fail_msg("triangles: %zu of 20000 groups of 4 differ between SIMD and scalar", differ);
+    assert_true(hits > 1000); /* the comparison saw hits, not only misses */
+
+    /* Bundles of a real hierarchy, rays with and without a footprint. */
+    sg_mesh m = sphere_mesh(32, 64);
+    sg_hybrid *h = build(&m, 0);
+    size_t bdiff = 0, entered = 0, points = 0;
+    for (size_t bi = 0; bi < h->tree.bundle_count; ++bi)
+        for (int k = 0; k < 16; ++k) {
+            /* aimed near lane k % W's centre (NaN for an empty lane: a
+             * NaN ray, which both must treat alike) */
+            const sg_stree_bundle *B = &h->tree.bundles[bi];
+            int l = k % SG_STREE_WIDTH;
+            sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
+            sg_vec3 o = sg_v3_scale(random_dir(&rng), 3.0f);
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(random_dir(&rng), 0.1f)));
+            sg_bundle_ray br = {.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f,
+                                .lod0 = k % 2 ? 0.01f : 0.0f, .lod1 = k % 2 ? 0.05f : 0.0f};
+            float ta[SG_STREE_WIDTH], tb[SG_STREE_WIDTH];
+            unsigned la, lb;
+            unsigned ma = sg_bundle_test(&h->tree.bundles[bi], &br, INFINITY, ta, &la);
+            unsigned mb = sg_bundle_test_scalar(&h->tree.bundles[bi], &br, INFINITY, tb, &lb);
+            int same = ma == mb && (la & ma) == (lb & mb);
+            for (int l = 0; l < SG_STREE_WIDTH && same; ++l)
+                if (ma >> l & 1u)
+                    same = memcmp(&ta[l], &tb[l], 4) == 0;
+            bdiff += !same;
+            entered += (size_t)__builtin_popcount(ma);
+            points += (size_t)__builtin_popcount(la & ma);
+        }
+    print_message("bundles: %zu lanes entered, %zu point-sized\n", entered, points);
+    if (bdiff)
+        fail_msg("bundles: %zu tests differ between SIMD and scalar", bdiff);
+    assert_true(entered > 100 && points > 10);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hybrid_watertight_plane),
+        cmocka_unit_test(test_hybrid_watertight_sphere),
+        cmocka_unit_test(test_hybrid_lod_zero_is_full),
+        cmocka_unit_test(test_hybrid_lod_error_bound),
+        cmocka_unit_test(test_hybrid_threads_identical),
+        cmocka_unit_test(test_hybrid_no_self_hits),
+        cmocka_unit_test(test_hybrid_hit_sites),
+        cmocka_unit_test(test_hybrid_bad_meshes),
+        cmocka_unit_test(test_hybrid_kernels_agree),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
