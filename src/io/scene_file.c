@@ -457,9 +457,9 @@ static sg_status parse_material(const ctx *c, const cJSON *obj, const char *jp, 
 static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, sg_scene_desc *d)
 {
     static const char *const keys[] = {"model", "kernel", "samples_per_cell", "refinements", "iso_tolerance",
-                                       "iso_max_depth", "iso_leaf_radii", "iso_lod"};
-    static const char *const models[] = {"mls", "disk", "iso"};
-    static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK, SG_SURFACE_ISO};
+                                       "iso_max_depth", "iso_leaf_radii", "iso_lod", "hybrid_lod"};
+    static const char *const models[] = {"mls", "disk", "iso", "hybrid"};
+    static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK, SG_SURFACE_ISO, SG_SURFACE_HYBRID};
     static const range TOLERANCE = {0.0, 10.0, 1, 0};
     static const range LOD_PIXELS = {0.0, 64.0, 0, 0};
     static const range LEAF_RADII = {0.0, 16.0, 1, 0};
@@ -487,6 +487,11 @@ static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, s
         float lod = 0.0f;
         st = get_float(c, obj, jp, "iso_lod", LOD_PIXELS, &lod);
         d->iso_lod = lod > 0.0f ? lod : -1.0f;
+    }
+    if (st == SG_OK && member(obj, "hybrid_lod")) { /* 0 in the file: full detail */
+        float lod = 0.0f;
+        st = get_float(c, obj, jp, "hybrid_lod", LOD_PIXELS, &lod);
+        d->hybrid_lod = lod > 0.0f ? lod : -1.0f;
     }
     const cJSON *r = member(obj, "refinements");
     if (st == SG_OK && r) {

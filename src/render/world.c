@@ -16,6 +16,7 @@
 
 #include "core/alloc.h"
 #include "envmap/analytic.h"
+#include "points/mesh_shapes.h"
 #include "points/model_points.h"
 #include "points/primitives.h"
 #include "points/room.h"
@@ -79,6 +80,58 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
     return st;
 }
 
+/* SG_SURFACE_HYBRID: the model as triangles. Files and the bunny as
+ * read; the builtins as meshes of about the splats' resolution, since the
+ * bake stores light at vertices: "ground" a 30 x 30 square of
+ * side x side cells (side = round(sqrt(points)), default 128), "sphere"
+ * the unit sphere with rings = round(sqrt(points / 2)) bands (default
+ * 224: 100k triangles), "room" as points/room.h builds it (large faces:
+ * its light is interpolated across each face). */
+static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh *out, sg_error *err)
+{
+    switch (m->kind) {
+    case SG_SCENE_MODEL_FILE:
+        return sg_mesh_read(m->path, out, err);
+    case SG_SCENE_MODEL_BUNNY: {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/bunny.ply", SG_ASSET_DIR);
+        return sg_mesh_read(path, out, err);
+    }
+    case SG_SCENE_MODEL_GROUND: {
+        int side = m->points.points > 0 ? (int)fmin(4096.0, fmax(1.0, floor(sqrt((double)m->points.points) + 0.5))) : 128;
+        return sg_mesh_make_plane(side, 15.0f, out, err);
+    }
+    case SG_SCENE_MODEL_SPHERE: {
+        int rings = m->points.points > 0 ? (int)fmin(4096.0, fmax(2.0, floor(sqrt(m->points.points / 2.0) + 0.5)))
+                                         : 224;
+        return sg_mesh_make_sphere(rings, 2 * rings, sg_v3(0, 0, 0), 1.0f, out, err);
+    }
+    case SG_SCENE_MODEL_ROOM:
+        return sg_room_mesh(NULL, out, err);
+    default:
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "$.models[%zu]: unknown model kind %d", index, (int)m->kind);
+    }
+}
+
+static void transform_mesh(const sg_scene_transform *t, sg_mesh *mesh)
+{
+    for (size_t i = 0; i < mesh->vertex_count; ++i) {
+        float *p = mesh->positions + 3 * i;
+        sg_vec3 q = sg_scene_transform_point(t, sg_v3(p[0], p[1], p[2]));
+        p[0] = q.x, p[1] = q.y, p[2] = q.z;
+        if (mesh->normals) {
+            float *n = mesh->normals + 3 * i;
+            sg_vec3 r = sg_scene_transform_normal(t, sg_v3(n[0], n[1], n[2]));
+            n[0] = r.x, n[1] = r.y, n[2] = r.z;
+        }
+    }
+}
+
+/* Model i's surface: the hybrid hierarchy over its triangles, or splats
+ * under one of the point models. */
+static sg_status make_model_scene(const sg_scene_file *sf, size_t i, const sg_world_desc *d, sg_scene **out,
+                                  sg_error *err);
+
 static void transform_points(const sg_scene_transform *t, sg_pointset *ps)
 {
     for (size_t i = 0; i < ps->count; ++i) {
@@ -140,7 +193,7 @@ static void say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ..
 /* "scan.ply" for a file model, "builtin bunny" otherwise. */
 static const char *model_label(const sg_scene_model *m)
 {
-    static const char *const builtin[] = {"", "builtin bunny", "builtin ground", "builtin sphere"};
+    static const char *const builtin[] = {"", "builtin bunny", "builtin ground", "builtin sphere", "builtin room"};
     if (m->kind == SG_SCENE_MODEL_FILE && m->path) {
         const char *slash = strrchr(m->path, '/');
         return slash ? slash + 1 : m->path;
@@ -201,18 +254,7 @@ sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, 
     w->bounds = sg_aabb_empty();
     for (size_t i = 0; i < sf->model_count; ++i) {
         const sg_scene_model *m = &sf->models[i];
-        sg_pointset ps = {0};
-        sg_model_points_report rep = {0};
-        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): making splats", i + 1, sf->model_count, model_label(m));
-        if ((st = load_model_points(m, i, &ps, &rep, err)) != SG_OK)
-            goto fail;
-        note_points(d, i, m, &rep, ps.count);
-        transform_points(&m->transform, &ps);
-        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1,
-            sf->model_count, model_label(m), m->surface.model == SG_SURFACE_DISK ? "disk" : m->surface.model == SG_SURFACE_ISO ? "ISO" : "MLS", ps.count);
-        st = sg_scene_create(&m->surface, &ps, &w->scenes[i], err);
-        sg_pointset_free(&ps);
-        if (st != SG_OK)
+        if ((st = make_model_scene(sf, i, d, &w->scenes[i], err)) != SG_OK)
             goto fail;
         w->materials[i] = m->material;
         sg_scene_info info;
@@ -228,6 +270,39 @@ sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, 
     return SG_OK;
 fail:
     sg_world_destroy(w);
+    return st;
+}
+
+static sg_status make_model_scene(const sg_scene_file *sf, size_t i, const sg_world_desc *d, sg_scene **out,
+                                  sg_error *err)
+{
+    const sg_scene_model *m = &sf->models[i];
+    sg_status st;
+    if (m->surface.model == SG_SURFACE_HYBRID) {
+        sg_mesh mesh = {0};
+        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): reading triangles", i + 1, sf->model_count, model_label(m));
+        if ((st = load_model_mesh(m, i, &mesh, err)) != SG_OK)
+            return st;
+        transform_mesh(&m->transform, &mesh);
+        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the hybrid hierarchy of %zu triangles", i + 1,
+            sf->model_count, model_label(m), mesh.triangle_count);
+        st = sg_scene_create_mesh(&m->surface, &mesh, m->kind == SG_SCENE_MODEL_FILE ? m->path : model_label(m),
+                                  out, err);
+        sg_mesh_free(&mesh);
+        return st;
+    }
+    sg_pointset ps = {0};
+    sg_model_points_report rep = {0};
+    say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): making splats", i + 1, sf->model_count, model_label(m));
+    if ((st = load_model_points(m, i, &ps, &rep, err)) != SG_OK)
+        return st;
+    note_points(d, i, m, &rep, ps.count);
+    transform_points(&m->transform, &ps);
+    say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1, sf->model_count,
+        model_label(m),
+        m->surface.model == SG_SURFACE_DISK ? "disk" : m->surface.model == SG_SURFACE_ISO ? "ISO" : "MLS", ps.count);
+    st = sg_scene_create(&m->surface, &ps, out, err);
+    sg_pointset_free(&ps);
     return st;
 }
 

@@ -139,6 +139,9 @@ typedef struct sg_hybrid_hit {
                           node hit or a miss                                   */
     uint32_t node;     /* node id of a level-of-detail hit; else SG_INVALID_ID */
     uint32_t vertex[3]; /* the triangle's vertex ids (leaf hit); else SG_INVALID_ID */
+    uint32_t slot;     /* the triangle's position in leaf order (what
+                          hybrid_int.h's tri[] is indexed by); else
+                          SG_INVALID_ID                                      */
     float b1, b2;      /* barycentric weights of the triangle's 2nd and 3rd
                           vertex (the 1st has 1 - b1 - b2); 0 for a node hit   */
     int back;          /* 1 when the ray met the side ng points away from      */

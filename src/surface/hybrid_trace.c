@@ -347,7 +347,7 @@ static void miss(sg_hybrid_hit *hit)
 {
     memset(hit, 0, sizeof *hit);
     hit->t = INFINITY;
-    hit->triangle = hit->node = SG_INVALID_ID;
+    hit->triangle = hit->node = hit->slot = SG_INVALID_ID;
     hit->vertex[0] = hit->vertex[1] = hit->vertex[2] = SG_INVALID_ID;
 }
 
@@ -408,6 +408,7 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
     const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *cc = h->pos + 3 * (size_t)v[2];
     const float b0 = 1.0f - bst.b1 - bst.b2;
     hit->triangle = h->tri_id[i];
+    hit->slot = i;
     hit->vertex[0] = v[0];
     hit->vertex[1] = v[1];
     hit->vertex[2] = v[2];

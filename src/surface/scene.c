@@ -22,7 +22,10 @@
 
 #include "accel/kdtree.h"
 #include "core/alloc.h"
+#include "io/mesh.h"
 #include "surface/disk.h"
+#include "surface/hybrid.h"
+#include "surface/hybrid_scene.h"
 #include "surface/iso.h"
 #include "surface/iso_sites.h"
 #include "surface/mls.h"
@@ -43,6 +46,9 @@ struct sg_scene {
     sg_sites sites;       /* the light sites: a view of the splats          */
     sg_iso *iso;          /* SG_SURFACE_ISO: the octree (no kd-tree then)   */
     sg_iso_sites iso_sites; /* ...and its corners as light sites            */
+    sg_hybrid *hybrid;    /* SG_SURFACE_HYBRID: the sphere hierarchy (no
+                             kd-tree, no points)                          */
+    sg_hybrid_sites hybrid_sites; /* ...its vertices and nodes as sites     */
     sg_kdtree tree;
     sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
     sg_mls_params mls;
@@ -56,6 +62,7 @@ static sg_scene_desc with_defaults(const sg_scene_desc *d)
     if (r.max_sample_spacing == 0.0f) r.max_sample_spacing = 0.5f;
     if (r.max_depth <= 0) r.max_depth = 48;
     if (r.blend_depth <= 0.0f) r.blend_depth = 0.5f;
+    if (r.hybrid_lod == 0.0f) r.hybrid_lod = SG_HYBRID_LOD_DEFAULT;
     return r;
 }
 
@@ -259,6 +266,9 @@ sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, 
     if (st != SG_OK)
         return st;
     sg_scene_desc d = with_defaults(desc);
+    if (d.model == SG_SURFACE_HYBRID)
+        return sg_error_set(err, SG_ERR_INVALID_ARG,
+                            "scene: the hybrid surface needs a triangle mesh, not points (sg_scene_create_mesh)");
     if (d.model != SG_SURFACE_MLS && d.model != SG_SURFACE_DISK && d.model != SG_SURFACE_ISO)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: unknown surface model %d", (int)d.model);
     if (d.kernel != SG_KERNEL_HAT && d.kernel != SG_KERNEL_GAUSSIAN)
@@ -363,10 +373,54 @@ fail:
     return st;
 }
 
+sg_status sg_scene_create_mesh(const sg_scene_desc *desc, const sg_mesh *mesh, const char *name, sg_scene **out,
+                               sg_error *err)
+{
+    double t_start = omp_get_wtime();
+    const char *label = name ? name : "mesh";
+    if (!mesh || !out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "scene: NULL mesh or out");
+    sg_scene_desc d = with_defaults(desc);
+    if (d.model != SG_SURFACE_HYBRID)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: surface model %d does not take a mesh (sample it to "
+                            "points first)", label, (int)d.model);
+    if (!isfinite(d.hybrid_lod))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: hybrid lod %g is not finite", label,
+                            (double)d.hybrid_lod);
+    sg_scene *sc = sg_calloc_array(1, sizeof *sc);
+    if (!sc)
+        return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory");
+    sc->desc = d;
+    sg_hybrid_desc hd = {.threads = d.threads, .name = label};
+    sg_status st = sg_hybrid_create(&hd, mesh, &sc->hybrid, err);
+    if (st == SG_OK)
+        st = sg_hybrid_sites_create(sc->hybrid, &sc->hybrid_sites, err);
+    if (st != SG_OK) {
+        sg_scene_destroy(sc);
+        return st;
+    }
+    sc->sites = sc->hybrid_sites.view;
+    sg_hybrid_info hi;
+    sg_hybrid_get_info(sc->hybrid, &hi);
+    sg_scene_info *in = &sc->info;
+    in->splat_count = hi.vertex_count;
+    in->node_count = hi.node_count;
+    in->leaf_count = hi.leaf_count;
+    in->depth = hi.depth;
+    in->bounds = hi.bounds;
+    in->diagonal = hi.diagonal;
+    in->memory_bytes = sizeof *sc + hi.memory_bytes + sg_hybrid_sites_memory(&sc->hybrid_sites);
+    in->build_seconds = omp_get_wtime() - t_start;
+    *out = sc;
+    return SG_OK;
+}
+
 void sg_scene_destroy(sg_scene *sc)
 {
     if (!sc)
         return;
+    sg_hybrid_sites_free(&sc->hybrid_sites);
+    sg_hybrid_destroy(sc->hybrid);
     sg_pointset_free(&sc->points);
     sg_iso_sites_free(&sc->iso_sites);
     sg_iso_destroy(sc->iso);
@@ -489,6 +543,8 @@ static int hit_weights(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, flo
 
 int sg_scene_hit_sites(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_hit_sites(sc->hybrid, &sc->hybrid_sites, hit, ids, weights, max);
     if (sc->iso)
         return sg_iso_hit_sites(sc->iso, &sc->iso_sites, hit, ids, weights, max);
     return hit_weights(sc, hit, ids, weights, max, 1);
@@ -496,6 +552,8 @@ int sg_scene_hit_sites(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, flo
 
 int sg_scene_hit_sites_reference(const sg_scene *sc, const sg_hit *hit, uint32_t *ids, float *weights, int max)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_hit_sites(sc->hybrid, &sc->hybrid_sites, hit, ids, weights, max);
     if (sc->iso)
         return sg_iso_hit_sites(sc->iso, &sc->iso_sites, hit, ids, weights, max);
     return hit_weights(sc, hit, ids, weights, max, 0);
@@ -523,6 +581,8 @@ sg_hit sg_scene_site_hit(const sg_scene *sc, uint32_t site)
 
 sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_hit_albedo(sc->hybrid, &sc->hybrid_sites, hit);
     const sg_pointset *p = &sc->points;
     uint32_t i = hit->splat;
     return i < p->count ? sg_v3(p->ar[i], p->ag[i], p->ab[i]) : sg_v3(1.0f, 1.0f, 1.0f);
@@ -532,6 +592,8 @@ void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->in
 
 sg_ray sg_scene_spawn_ray(const sg_scene *sc, const sg_hit *h, sg_vec3 dir, float tmax)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_spawn_ray(sc->hybrid, &sc->hybrid_sites, h, dir, tmax);
     sg_ray r = {.org = h->p, .dir = dir, .tmin = 0.0f, .tmax = tmax};
     r.flags = sg_v3_dot(dir, h->n) >= 0.0f ? SG_RAY_FRONT_ONLY : SG_RAY_BACK_ONLY;
     if (h->splat < sc->points.count) {
@@ -910,6 +972,16 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     mask &= 15u;
     if (sc->iso)
         return sg_iso_intersect4(sc->iso, rays, mask, hits, stats);
+    if (sc->hybrid) { /* one by one: a ray's traversal is short (nearest first) */
+        unsigned found = 0;
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (sg_hybrid_scene_intersect(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, &rays[r], &hits[r],
+                                          stats))
+                found |= 1u << r;
+        }
+        return found;
+    }
     unsigned found = 0;
 #ifdef SG_SCENE_TRAVERSE4
     if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
@@ -930,6 +1002,8 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
 
 int sg_scene_intersect(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_intersect(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, ray, hit, stats);
     if (sc->iso)
         return sg_iso_intersect(sc->iso, ray, hit, stats);
     return nearest(sc, ray, hit, stats);
@@ -937,6 +1011,8 @@ int sg_scene_intersect(const sg_scene *sc, const sg_ray *ray, sg_hit *hit, sg_ra
 
 int sg_scene_occluded(const sg_scene *sc, const sg_ray *ray, sg_ray_stats *stats)
 {
+    if (sc->hybrid)
+        return sg_hybrid_scene_occluded(sc->hybrid, sc->desc.hybrid_lod, ray, stats);
     if (sc->iso)
         return sg_iso_occluded(sc->iso, ray, stats);
     return traverse(sc, ray, NULL, stats, QUERY_ANY);

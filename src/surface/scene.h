@@ -1,4 +1,4 @@
-/* scene.h — a ray-traceable surface over a point set.
+/* scene.h — a ray-traceable surface over a point set (or a triangle mesh).
  *
  * What it does: builds a SAH kd-tree over the splats' boxes (or, for the
  * ISO, an octree) and intersects rays with one of three surface models
@@ -14,6 +14,11 @@
  *                    octree (Kashyap 2010 ch. 4, iso.h): no kd-tree, one
  *                    trilinear patch per leaf; its light sites are the
  *                    octree's corners (iso_sites.h), not the splats.
+ *   SG_SURFACE_HYBRID a triangle mesh in Ye's bounding-sphere hierarchy
+ *                    (Ye 2005, hybrid.h), made by sg_scene_create_mesh:
+ *                    exact watertight triangles, inner nodes hit as disks
+ *                    when under desc.hybrid_lod ray footprints (ray.spread);
+ *                    light sites at its vertices and nodes (hybrid_scene.h).
  * No leaks (issue 12): a hit's normal faces the ray the way its crossing
  * says (entry: dot(dir, n) < 0, exit: > 0); near folds and thin walls the
  * MLS field is taken per group of splats facing the ray the same way, so
@@ -49,8 +54,12 @@ typedef struct sg_scene sg_scene; /* opaque */
 typedef enum sg_surface_model {
     SG_SURFACE_MLS = 0,  /* implicit moving-least-squares surface (default) */
     SG_SURFACE_DISK = 1, /* disk splats with deep blending                  */
-    SG_SURFACE_ISO = 2   /* the MLS surface sampled into an implicit surface
+    SG_SURFACE_ISO = 2,  /* the MLS surface sampled into an implicit surface
                             octree (iso.h); light sites at its corners     */
+    SG_SURFACE_HYBRID = 3 /* a triangle mesh in Ye's sphere hierarchy with
+                            level of detail (hybrid.h); built from a mesh
+                            by sg_scene_create_mesh; light sites at its
+                            vertices and nodes (hybrid_scene.h)           */
 } sg_surface_model;
 
 typedef enum sg_kernel {
@@ -88,6 +97,10 @@ typedef struct sg_scene_desc {
                                   (rule a, iso.h); default 2                   */
     float iso_lod;             /* ISO: level-of-detail threshold of camera rays,
                                   pixels; default 1; negative: off (iso.h)     */
+    float hybrid_lod;          /* HYBRID: a node whose diameter is below this
+                                  many ray footprints (sg_ray.spread) is hit
+                                  as a point; default SG_HYBRID_LOD_DEFAULT
+                                  (1 pixel); negative: full detail always    */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */
@@ -108,6 +121,16 @@ typedef struct sg_scene_info {
 
 sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points,
                           sg_scene **out, sg_error *err);
+
+/* A scene over a triangle mesh: SG_SURFACE_HYBRID (the only model that
+ * takes one; desc->model must say so). name labels the mesh in messages
+ * (a path; NULL: "mesh"). Errors as sg_hybrid_create (no triangles, an
+ * index out of range, a position that is not finite, ...). The mesh may
+ * be freed afterwards. sg_scene_points of such a scene is empty; its
+ * info's splat_count is the vertex count. */
+struct sg_mesh;
+sg_status sg_scene_create_mesh(const sg_scene_desc *desc, const struct sg_mesh *mesh, const char *name,
+                               sg_scene **out, sg_error *err);
 
 /* NULL is a no-op. */
 void sg_scene_destroy(sg_scene *scene);

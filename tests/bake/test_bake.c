@@ -478,16 +478,20 @@ static void test_bake_glossy_white_furnace_and_lookup(void **state)
     sg_world_destroy(w);
 }
 
-/* The bake is bit-identical for 1 and 2 threads. */
-static void test_bake_deterministic_across_threads(void **state)
+/* The bake is bit-identical for 1 and 2 threads (surface model `model`
+ * for both models). */
+static void deterministic_across_threads(const char *model)
 {
-    (void)state;
     /* A glossy sphere, so that the sample points, their refinement and the
      * glossy bins are all covered. */
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"sphere\",\"points\":10000,"
-                                  "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"type\":\"ggx\","
-                                  "\"roughness\":0.4,\"specular\":0.3}},{\"builtin\":\"ground\"}],"
-                                  "\"envmap\":{\"builtin\":\"sunsky\"}}");
+    char json[512];
+    snprintf(json, sizeof json,
+             "{\"models\":[{\"builtin\":\"sphere\",\"points\":10000,\"surface\":{\"model\":\"%s\"},"
+             "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"type\":\"ggx\","
+             "\"roughness\":0.4,\"specular\":0.3}},{\"builtin\":\"ground\",\"surface\":{\"model\":\"%s\"}}],"
+             "\"envmap\":{\"builtin\":\"sunsky\"}}",
+             model, model);
+    sg_world *w = sg_test_world_from_json(json);
     sg_image a, c;
     sg_bake_frame_desc fd = {.camera = camera(sg_v3(0, 2.5f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f), .width = 32,
                              .height = 32, .threads = 2};
@@ -528,6 +532,19 @@ static void test_bake_deterministic_across_threads(void **state)
     sg_world_destroy(w);
 }
 
+static void test_bake_deterministic_across_threads(void **state)
+{
+    (void)state;
+    deterministic_across_threads("mls");
+}
+
+/* The hybrid hierarchy (issue 15): its build, traversal, sites and bake. */
+static void test_bake_deterministic_across_threads_hybrid(void **state)
+{
+    (void)state;
+    deterministic_across_threads("hybrid");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -538,6 +555,7 @@ int main(void)
         cmocka_unit_test(test_bake_glossy_matches_reference),
         cmocka_unit_test(test_bake_glossy_white_furnace_and_lookup),
         cmocka_unit_test(test_bake_deterministic_across_threads),
+        cmocka_unit_test(test_bake_deterministic_across_threads_hybrid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

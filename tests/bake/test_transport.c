@@ -243,6 +243,16 @@ static void test_transport_white_furnace_every_pixel_iso(void **state)
     white_furnace_every_pixel("iso");
 }
 
+/* The hybrid hierarchy (issue 15): the sphere as a closed mesh of 20k
+ * triangles, the bunny's and the ground's triangles; light at vertices
+ * and nodes, a hit blends three vertices by its barycentrics (sum 1) or
+ * reads one node: the same bounds. */
+static void test_transport_white_furnace_every_pixel_hybrid(void **state)
+{
+    (void)state;
+    white_furnace_every_pixel("hybrid");
+}
+
 /* 5. Light per side. From the centre of a closed sphere under the sky the
  * reference sees (almost) nothing: only light through gaps between
  * splats. The bake's lookup of the inside (back) sides must be as dark:
@@ -289,6 +299,12 @@ static void test_transport_camera_inside_closed_model_iso(void **state)
     camera_inside_closed_model("iso");
 }
 
+static void test_transport_camera_inside_closed_model_hybrid(void **state)
+{
+    (void)state;
+    camera_inside_closed_model("hybrid");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -297,8 +313,10 @@ int main(void)
         cmocka_unit_test(test_transport_inside_closed_model),
         cmocka_unit_test(test_transport_white_furnace_every_pixel),
         cmocka_unit_test(test_transport_white_furnace_every_pixel_iso),
+        cmocka_unit_test(test_transport_white_furnace_every_pixel_hybrid),
         cmocka_unit_test(test_transport_camera_inside_closed_model),
         cmocka_unit_test(test_transport_camera_inside_closed_model_iso),
+        cmocka_unit_test(test_transport_camera_inside_closed_model_hybrid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,273 @@
+/* hybrid_scene.c — the hybrid hierarchy's hits and light sites in the
+ * terms of scene.h (Ye 2005 as a surface model). See hybrid_scene.h.
+ *
+ * Invariants:
+ *  1. every site has a finite position, a unit normal and a reach > 0
+ *     (stand-ins copy the first real vertex site);
+ *  2. a triangle hit's sg_hit.leaf < triangle_count and names the triangle
+ *     in leaf order; a node hit's splat >= vertex_count;
+ *  3. queries read the hierarchy and the sites only (thread-safe).
+ */
+#include "surface/hybrid_scene.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "core/alloc.h"
+#include "surface/hybrid_int.h"
+
+enum { CHANNELS = 10 }; /* px py pz nx ny nz radius ar ag ab */
+
+void sg_hybrid_sites_free(sg_hybrid_sites *s)
+{
+    if (!s)
+        return;
+    sg_free(s->data);
+    memset(s, 0, sizeof *s);
+}
+
+size_t sg_hybrid_sites_memory(const sg_hybrid_sites *s) { return s->view.count * CHANNELS * sizeof(float); }
+
+static int usable_normal(sg_vec3 n)
+{
+    float l = n.x * n.x + n.y * n.y + n.z * n.z;
+    return isfinite(l) && fabsf(l - 1.0f) < 1e-3f;
+}
+
+sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const size_t nv = h->vertex_count, n = sg_hybrid_site_count(h);
+    float *d = sg_alloc_array(n, CHANNELS * sizeof(float));
+    float *reach = sg_calloc_array(nv, sizeof(float));
+    if (!d || !reach) {
+        sg_free(d);
+        sg_free(reach);
+        return sg_error_set(err, SG_ERR_NOMEM, "hybrid: out of memory for %zu light sites", n);
+    }
+    float *px = d, *py = d + n, *pz = d + 2 * n, *nx = d + 3 * n, *ny = d + 4 * n, *nz = d + 5 * n;
+    float *rad = d + 6 * n, *ar = d + 7 * n, *ag = d + 8 * n, *ab = d + 9 * n;
+    /* A vertex's reach: its longest traced edge, so its light spans the
+     * triangles it is interpolated over (in leaf order: deterministic). */
+    for (size_t i = 0; i < h->info.triangle_count; ++i) {
+        const uint32_t *v = h->tri + 3 * i;
+        for (int k = 0; k < 3; ++k) {
+            const float *a = h->pos + 3 * (size_t)v[k], *b = h->pos + 3 * (size_t)v[(k + 1) % 3];
+            float e = sqrtf((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                            (a[2] - b[2]) * (a[2] - b[2]));
+            reach[v[k]] = fmaxf(reach[v[k]], e);
+            reach[v[(k + 1) % 3]] = fmaxf(reach[v[(k + 1) % 3]], e);
+        }
+    }
+    size_t first_real = SIZE_MAX;
+    for (size_t i = 0; i < n; ++i) {
+        sg_vec3 p, nn;
+        float r = 0.0f;
+        int ok = sg_hybrid_site(h, (uint32_t)i, &p, &nn) && usable_normal(nn) && sg_v3_isfinite(p);
+        if (ok && i < nv) {
+            r = reach[i];
+        } else if (ok) {
+            const uint32_t k = (uint32_t)(i - nv);
+            const sg_stree_bundle *B = &h->tree.bundles[k / SG_STREE_WIDTH];
+            r = sg_hybrid_node_radius(h, k);
+            ok = B->sin_cone[k % SG_STREE_WIDTH] != 255; /* never hit as a point */
+        }
+        ok = ok && r > 0.0f && isfinite(r);
+        sg_vec3 c = sg_v3(1.0f, 1.0f, 1.0f);
+        if (ok && h->vcolor) {
+            const float *col = i < nv ? h->vcolor + 3 * i : h->tree.colors + 3 * (i - nv);
+            c = sg_v3(col[0], col[1], col[2]);
+        }
+        if (!ok) {
+            rad[i] = -1.0f; /* stand-in, filled below */
+            continue;
+        }
+        if (first_real == SIZE_MAX)
+            first_real = i;
+        px[i] = p.x, py[i] = p.y, pz[i] = p.z;
+        nx[i] = nn.x, ny[i] = nn.y, nz[i] = nn.z;
+        rad[i] = r;
+        ar[i] = c.x, ag[i] = c.y, ab[i] = c.z;
+    }
+    sg_free(reach);
+    /* create() keeps at least one triangle of non-zero area, and its
+     * vertices have normals: there is a real site. */
+    if (first_real == SIZE_MAX) {
+        sg_free(d);
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "hybrid: no vertex has a usable normal");
+    }
+    for (size_t i = 0; i < n; ++i)
+        if (rad[i] < 0.0f) {
+            const size_t j = first_real;
+            px[i] = px[j], py[i] = py[j], pz[i] = pz[j];
+            nx[i] = nx[j], ny[i] = ny[j], nz[i] = nz[j];
+            rad[i] = rad[j];
+            ar[i] = ar[j], ag[i] = ag[j], ab[i] = ab[j];
+        }
+    out->data = d;
+    out->vertex_count = nv;
+    out->view = (sg_sites){.count = n, .px = px, .py = py, .pz = pz, .nx = nx, .ny = ny, .nz = nz,
+                           .radius = rad, .ar = ar, .ag = ag, .ab = ab};
+    return SG_OK;
+}
+
+static sg_footprint footprint(float lod, const sg_ray *ray)
+{
+    return (sg_footprint){0.0f, ray->spread, lod};
+}
+
+/* The geometric normal of the triangle at leaf-order position i. */
+static sg_vec3 tri_normal(const sg_hybrid *h, uint32_t i)
+{
+    const uint32_t *v = h->tri + 3 * (size_t)i;
+    const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
+    return sg_v3_normalize(sg_v3_cross(sg_v3(b[0] - a[0], b[1] - a[1], b[2] - a[2]),
+                                       sg_v3(c[0] - a[0], c[1] - a[1], c[2] - a[2])));
+}
+
+static void to_ray_stats(sg_ray_stats *s, const sg_hybrid_stats *hs)
+{
+    if (!s)
+        return;
+    s->rays += hs->rays;
+    s->nodes += hs->pops;
+    s->isects += hs->lod_tests;
+    s->splats += hs->triangles;
+    s->hits += hs->hits;
+}
+
+int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *ray,
+                              sg_hit *hit, sg_ray_stats *stats)
+{
+    sg_footprint fp = footprint(lod, ray);
+    sg_hybrid_hit hh;
+    sg_hybrid_stats hs = {0};
+    int found = sg_hybrid_intersect(h, ray, lod > 0.0f ? &fp : NULL, &hh, stats ? &hs : NULL);
+    to_ray_stats(stats, &hs);
+    if (!found) {
+        hit->splat = SG_INVALID_ID;
+        return 0;
+    }
+    hit->t = hh.t;
+    hit->p = hh.p;
+    if (hh.node != SG_INVALID_ID) {
+        hit->n = hh.ns;
+        hit->splat = (uint32_t)(s->vertex_count + hh.node);
+        hit->leaf = SG_INVALID_ID;
+        return 1;
+    }
+    /* The side the ray met is the geometric normal's; a shading normal
+     * that says otherwise (a grazing ray) gives way to it. */
+    float dg = sg_v3_dot(ray->dir, hh.ng), ds = sg_v3_dot(ray->dir, hh.ns);
+    hit->n = (dg < 0.0f) == (ds < 0.0f) && ds != 0.0f ? hh.ns : hh.ng;
+    hit->leaf = hh.slot;
+    uint32_t ids[1];
+    float w[1];
+    sg_hybrid_hit_sites(h, &hh, ids, w, 1);
+    hit->splat = ids[0];
+    return 1;
+}
+
+int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, sg_ray_stats *stats)
+{
+    sg_footprint fp = footprint(lod, ray);
+    sg_hybrid_stats hs = {0};
+    int found = sg_hybrid_occluded(h, ray, lod > 0.0f ? &fp : NULL, stats ? &hs : NULL);
+    to_ray_stats(stats, &hs);
+    return found;
+}
+
+/* The triangle hit behind an sg_hit (invariant 2): vertices and
+ * barycentrics of p, in double. */
+static sg_hybrid_hit triangle_hit(const sg_hybrid *h, const sg_hit *hit)
+{
+    sg_hybrid_hit hh = {.t = hit->t, .p = hit->p, .node = SG_INVALID_ID, .slot = hit->leaf};
+    const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
+    hh.triangle = h->tri_id[hit->leaf];
+    memcpy(hh.vertex, v, sizeof hh.vertex);
+    const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
+    const double p[3] = {hit->p.x, hit->p.y, hit->p.z};
+    double e1[3], e2[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)b[k] - a[k];
+        e2[k] = (double)c[k] - a[k];
+        w[k] = p[k] - a[k];
+    }
+    double d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0;
+    for (int k = 0; k < 3; ++k) {
+        d00 += e1[k] * e1[k];
+        d01 += e1[k] * e2[k];
+        d11 += e2[k] * e2[k];
+        d20 += w[k] * e1[k];
+        d21 += w[k] * e2[k];
+    }
+    double den = d00 * d11 - d01 * d01; /* > 0: traced triangles have area (hybrid_int.h invariant 1) */
+    hh.b1 = (float)((d11 * d20 - d01 * d21) / den);
+    hh.b2 = (float)((d00 * d21 - d01 * d20) / den);
+    hh.ng = tri_normal(h, hit->leaf);
+    hh.ns = hit->n;
+    return hh;
+}
+
+int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit, uint32_t *ids,
+                              float *weights, int max)
+{
+    if (max <= 0 || hit->splat == SG_INVALID_ID)
+        return 0;
+    if (hit->leaf < h->info.triangle_count) {
+        sg_hybrid_hit hh = triangle_hit(h, hit);
+        return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
+    }
+    if (hit->splat >= s->view.count)
+        return 0;
+    ids[0] = hit->splat;
+    weights[0] = 1.0f;
+    return 1;
+}
+
+sg_ray sg_hybrid_scene_spawn_ray(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit, sg_vec3 dir,
+                                 float tmax)
+{
+    if (hit->leaf < h->info.triangle_count) {
+        sg_hybrid_hit hh = triangle_hit(h, hit);
+        /* The caller chose dir on one side of the shading normal; where the
+         * triangle's plane puts it on the other (near the terminator of an
+         * interpolated normal), it would pass through its own triangle: a
+         * ray reflected off the inside of a closed mesh would leave it
+         * (measured: the reference saw 3e-5 of the sky from inside a
+         * closed sphere). Mirrored in the plane, it stays on its side. */
+        float dn = sg_v3_dot(dir, hit->n), dg = sg_v3_dot(dir, hh.ng);
+        if ((dn > 0.0f && dg < 0.0f) || (dn < 0.0f && dg > 0.0f))
+            dir = sg_v3_normalize(sg_v3_madd(dir, hh.ng, -2.0f * dg));
+        return sg_hybrid_spawn_ray(h, &hh, dir, tmax);
+    }
+    if (hit->splat >= s->vertex_count && hit->splat < s->view.count) {
+        sg_hybrid_hit hh = {.t = hit->t, .p = hit->p, .ng = hit->n, .ns = hit->n, .triangle = SG_INVALID_ID,
+                            .node = (uint32_t)(hit->splat - s->vertex_count), .slot = SG_INVALID_ID};
+        return sg_hybrid_spawn_ray(h, &hh, dir, tmax);
+    }
+    /* A site hit at a vertex: its neighbours' triangles meet it at t ~ 0
+     * within its reach; those within SG_SELF_COS of its normal are its own
+     * surface (ray.h). */
+    sg_ray r = {.org = hit->p, .dir = dir, .tmin = 0.0f, .tmax = tmax};
+    r.flags = sg_v3_dot(dir, hit->n) >= 0.0f ? SG_RAY_FRONT_ONLY : SG_RAY_BACK_ONLY;
+    if (hit->splat < s->view.count) {
+        r.self_n = hit->n;
+        r.self_r = s->view.radius[hit->splat];
+    }
+    return r;
+}
+
+sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit)
+{
+    uint32_t ids[3];
+    float w[3];
+    int n = sg_hybrid_scene_hit_sites(h, s, hit, ids, w, 3);
+    if (n == 0)
+        return sg_v3(1.0f, 1.0f, 1.0f);
+    sg_vec3 c = sg_v3(0.0f, 0.0f, 0.0f);
+    for (int i = 0; i < n; ++i)
+        c = sg_v3_madd(c, sg_v3(s->view.ar[ids[i]], s->view.ag[ids[i]], s->view.ab[ids[i]]), w[i]);
+    return c;
+}
