@@ -30,6 +30,16 @@
  *                                  equal their scalar references bit for bit
  *                                  on random rays (exact-zero edge functions
  *                                  and point-sized lanes included).
+ * 10. hybrid::scene_interface    through sg_scene: sites are unit-normal
+ *                                  surface points with reach > 0; a hit's
+ *                                  weights sum to 1, equal the hierarchy's
+ *                                  barycentrics, agree across an edge; a
+ *                                  ray without spread is full detail;
+ *                                  spawned rays do not hit their start.
+ * 11. hybrid::scene_errors       points for a hybrid scene, a mesh for a
+ *                                  point model, a point-cloud file as a
+ *                                  hybrid model: INVALID_ARG naming the
+ *                                  file or the cause.
  */
 #include "test_support.h"
 
@@ -43,6 +53,9 @@
 #include "math/triangle.h"
 #include "surface/hybrid.h"
 #include "surface/hybrid_int.h" /* the bundles, for the kernel comparison */
+#include "surface/scene.h"
+#include "io/scene_file.h"
+#include "render/world.h"
 
 static sg_hybrid *build(const sg_mesh *m, int threads)
 {
@@ -612,6 +625,132 @@ static void test_hybrid_kernels_agree(void **state)
     sg_mesh_free(&m);
 }
 
+/* ---- 10-11: behind sg_scene ------------------------------------------------- */
+
+static sg_scene *mesh_scene(const sg_mesh *m, float lod)
+{
+    sg_scene_desc d = {.model = SG_SURFACE_HYBRID, .hybrid_lod = lod};
+    sg_scene *sc = NULL;
+    sg_error err = {0};
+    if (sg_scene_create_mesh(&d, m, "test mesh", &sc, &err) != SG_OK)
+        fail_msg("sg_scene_create_mesh: %s", err.message);
+    return sc;
+}
+
+static void test_hybrid_scene_interface(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_scene *sc = mesh_scene(&m, 2.0f);
+    sg_hybrid *h = build(&m, 0);
+    const sg_sites *st = sg_scene_sites(sc);
+    assert_int_equal(st->count, sg_hybrid_site_count(h));
+    for (size_t i = 0; i < st->count; ++i) {
+        sg_vec3 p = sg_sites_position(st, i), n = sg_sites_normal(st, i);
+        /* every site on the unit sphere's surface, up to a node disk's
+         * offset (well under its reach) */
+        if (!(fabsf(sg_v3_length(n) - 1.0f) < 1e-3f) || !(st->radius[i] > 0.0f) ||
+            !(fabsf(sg_v3_length(p) - 1.0f) <= st->radius[i]) || !(sg_v3_dot(n, sg_v3_normalize(p)) > 0.5f))
+            fail_msg("site %zu: |p| %g, |n| %g, reach %g, n.p %g", i, (double)sg_v3_length(p),
+                     (double)sg_v3_length(n), (double)st->radius[i], (double)sg_v3_dot(n, sg_v3_normalize(p)));
+    }
+    size_t hits = 0, lod_hits = 0, self = 0;
+    uint64_t rng = 3;
+    for (int y = 0; y < FRAME; y += 2)
+        for (int x = 0; x < FRAME; x += 2) {
+            sg_ray r = camera_ray(x, y);
+            sg_hit a;
+            sg_hybrid_hit b;
+            int ha = sg_scene_intersect(sc, &r, &a, NULL); /* spread 0: full detail */
+            int hb = sg_hybrid_intersect(h, &r, NULL, &b, NULL);
+            assert_int_equal(ha, hb);
+            if (!ha)
+                continue;
+            ++hits;
+            assert_memory_equal(&a.t, &b.t, sizeof a.t);
+            uint32_t ia[3], ib[3];
+            float wa[3], wb[3];
+            int na = sg_scene_hit_sites(sc, &a, ia, wa, 3), nb = sg_hybrid_hit_sites(h, &b, ib, wb, 3);
+            assert_int_equal(na, 3);
+            assert_int_equal(nb, 3);
+            float sum = 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                assert_int_equal(ia[k], ib[k]);
+                /* recomputed from p in double: p carries float rounding
+                 * (~1e-7 of the unit sphere) over edges of ~0.025, so the
+                 * weights agree to ~1e-5 */
+                if (fabsf(wa[k] - wb[k]) > 1e-4f)
+                    fail_msg("pixel (%d, %d): weight %d is %g via the scene, %g in the hierarchy", x, y, k,
+                             (double)wa[k], (double)wb[k]);
+                sum += wa[k];
+            }
+            assert_float_equal(sum, 1.0f, 1e-6f);
+            assert_int_equal(sg_scene_hit_site(sc, &a), a.splat);
+            /* with a footprint: LOD hits read their node alone */
+            r.spread = 2.0f * TAN_HALF / FRAME;
+            sg_hit l;
+            if (sg_scene_intersect(sc, &r, &l, NULL) && l.leaf == SG_INVALID_ID) {
+                ++lod_hits;
+                assert_int_equal(sg_scene_hit_sites(sc, &l, ia, wa, 3), 1);
+                assert_true(ia[0] >= m.vertex_count && ia[0] < st->count);
+            }
+            /* spawned outwards: the sphere is convex, nothing to hit */
+            for (int k = 0; k < 4; ++k) {
+                sg_vec3 d = random_dir(&rng);
+                if (sg_v3_dot(d, a.n) < 0.0f)
+                    d = sg_v3_scale(d, -1.0f);
+                sg_ray s2 = sg_scene_spawn_ray(sc, &a, d, INFINITY);
+                sg_hit x2;
+                self += (size_t)sg_scene_intersect(sc, &s2, &x2, NULL);
+            }
+        }
+    assert_true(hits > 500);
+    assert_true(lod_hits > 0);
+    if (self)
+        fail_msg("%zu rays spawned outwards from the convex sphere hit it", self);
+    sg_hybrid_destroy(h);
+    sg_scene_destroy(sc);
+    sg_mesh_free(&m);
+}
+
+static void test_hybrid_scene_errors(void **state)
+{
+    (void)state;
+    sg_error err = {0};
+    sg_scene *sc = NULL;
+    /* points for a hybrid scene */
+    float xyz[3] = {0, 0, 0}, nrm[3] = {0, 1, 0}, rad = 1, col[3] = {1, 1, 1};
+    sg_pointset ps = {.count = 1, .px = &xyz[0], .py = &xyz[1], .pz = &xyz[2], .nx = &nrm[0], .ny = &nrm[1],
+                      .nz = &nrm[2], .radius = &rad, .ar = &col[0], .ag = &col[1], .ab = &col[2]};
+    sg_scene_desc hd = {.model = SG_SURFACE_HYBRID};
+    assert_int_equal(sg_scene_create(&hd, &ps, &sc, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "needs a triangle mesh"));
+    assert_null(sc);
+    /* a mesh for a point model */
+    sg_mesh m;
+    assert_int_equal(sg_mesh_make_plane(2, 1.0f, &m, NULL), SG_OK);
+    sg_scene_desc md = {.model = SG_SURFACE_MLS};
+    assert_int_equal(sg_scene_create_mesh(&md, &m, "plane.ply", &sc, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "plane.ply"));
+    assert_null(sc);
+    sg_mesh_free(&m);
+    /* a point cloud (a PLY without faces) as a hybrid model: the world's
+     * error names the file and says why */
+    const char ply[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                       "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    const char *path = sg_test_write_file("cloud.ply", ply, sizeof ply - 1);
+    char json[4200];
+    snprintf(json, sizeof json, "{\"models\":[{\"path\":\"%s\",\"surface\":{\"model\":\"hybrid\"}}]}", path);
+    sg_scene_file sf;
+    assert_int_equal(sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err), SG_OK);
+    sg_world *w = NULL;
+    assert_int_equal(sg_world_create(&sf, &w, &err), SG_ERR_INVALID_ARG);
+    if (!strstr(err.message, "cloud.ply") || !strstr(err.message, "no triangles"))
+        fail_msg("message \"%s\" should name cloud.ply and say it has no triangles", err.message);
+    assert_null(w);
+    sg_scene_file_free(&sf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -624,6 +763,8 @@ int main(void)
         cmocka_unit_test(test_hybrid_hit_sites),
         cmocka_unit_test(test_hybrid_bad_meshes),
         cmocka_unit_test(test_hybrid_kernels_agree),
+        cmocka_unit_test(test_hybrid_scene_interface),
+        cmocka_unit_test(test_hybrid_scene_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
