@@ -95,7 +95,7 @@
 #define MAX_SIZES 8
 #define N_RES 2
 #define N_MAT 2
-#define N_SURF 3 /* sg_surface_model values 0..2 */
+#define N_SURF 4 /* sg_surface_model values 0..3 */
 #define N_SNAP 2 /* keys written as PNG and compared between surfaces */
 #define SNAP_OFF 2 /* an 8-bit channel moved by more than this is "off" */
 #define KEY_SECONDS 0.1 /* path time between keys */
@@ -103,9 +103,11 @@
 static const int res_w[N_RES] = {512, 1024};
 static const int res_h[N_RES] = {512, 768};
 static const char *const mat_name[N_MAT] = {"diffuse", "glossy"};
-/* Indexed by sg_surface_model (SG_SURFACE_MLS 0, DISK 1, ISO 2). */
-static const char *const surf_name[N_SURF] = {"mls", "disk", "iso"};
-static const char *const surf_label[N_SURF] = {"MLS", "disk", "ISO"};
+/* Indexed by sg_surface_model (SG_SURFACE_MLS 0, DISK 1, ISO 2, HYBRID 3).
+ * The hybrid traces the mesh's own triangles (and the ground as a
+ * 128 x 128 grid): its size is the mesh's, whatever --sizes says. */
+static const char *const surf_name[N_SURF] = {"mls", "disk", "iso", "hybrid"};
+static const char *const surf_label[N_SURF] = {"MLS", "disk", "ISO", "hybrid"};
 
 static const char usage[] =
     "usage: bench_view [options]\n"
@@ -123,7 +125,7 @@ static const char usage[] =
     "  --huge-stride K   (default 4)\n"
     "  --glossy-up-to N  bake and walk the glossy material only for sizes <= N\n"
     "                    (default: every size)\n"
-    "  --surfaces LIST   surface models, comma-separated, of mls, disk, iso\n"
+    "  --surfaces LIST   surface models, comma-separated, of mls, disk, iso, hybrid\n"
     "                    (default mls,iso): each its own world, bake and walk\n"
     "  --threads N       OpenMP threads (default: all)\n"
     "  --out-dir DIR     CSV and markdown folder (default docs)\n"
@@ -275,7 +277,7 @@ static int parse_options(int argc, char **argv, options *o)
                 return fail("--glossy-up-to '%s': want a point count", v);
         } else if (strcmp(a, "--surfaces") == 0) {
             if (!parse_surfaces(v, o))
-                return fail("--surfaces '%s': want mls, disk and/or iso, comma-separated, each once", v);
+                return fail("--surfaces '%s': want mls, disk, iso and/or hybrid, comma-separated, each once", v);
         } else if (strcmp(a, "--threads") == 0) {
             if (!parse_size(v, 1, 4096, &n))
                 return fail("--threads '%s': want 1..4096", v);

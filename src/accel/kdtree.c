@@ -43,6 +43,7 @@
 #include <omp.h>
 
 #include "core/alloc.h"
+#include "core/arena.h"
 
 enum {
     BIN_COUNT = 32,          /* bins per axis for the binned SAH                 */
@@ -51,9 +52,6 @@ enum {
     STACK_PRIMS = 256,       /* partitions of up to this many ids stay on the stack */
     DEFAULT_MAX_DEPTH = 48
 };
-
-/* Arena blocks: large enough that a 24M-splat build needs a few thousand. */
-static const size_t ARENA_BLOCK_BYTES = (size_t)1 << 20;
 
 /* Wald's empty-space bonus: a split that cuts off an empty slab is worth a
  * little more than its SAH cost says, because empty space is free to skip. */
@@ -75,24 +73,14 @@ typedef struct bnode {
     uint8_t axis;
 } bnode;
 
-typedef struct arena_block {
-    struct arena_block *next;
-    size_t used, cap;
-    _Alignas(8) unsigned char data[];
-} arena_block;
-
-/* One per OpenMP thread: only that thread allocates from it or returns
- * nodes to its free list (tasks are tied, so a thread runs one at a time). */
-typedef struct arena {
-    arena_block *head;
-    bnode *free_nodes; /* collapsed nodes, linked through u.inner.child[0] */
-} arena;
-
 typedef struct build_ctx {
     const sg_kdtree_desc *d;
     float cost_trav, cost_isec;
     int max_depth;
-    arena *arenas; /* one per thread of the build's parallel region */
+    sg_arena_set *arena;  /* one arena per thread of the build's region   */
+    bnode **free_nodes;   /* per thread: collapsed nodes, linked through
+                             u.inner.child[0]; only that thread touches
+                             its list (tasks are tied)                    */
     int failed;    /* set (never cleared) when an allocation fails */
 } build_ctx;
 
@@ -102,37 +90,23 @@ static void set_failed(build_ctx *c)
     c->failed = 1;
 }
 
-/* `bytes` from the calling thread's arena, 8-byte aligned; NULL (and the
- * build marked failed) when out of memory. */
+/* `bytes` from the calling thread's arena; NULL (and the build marked
+ * failed) when out of memory. */
 static void *arena_alloc(build_ctx *c, size_t bytes)
 {
-    arena *a = &c->arenas[omp_get_thread_num()];
-    bytes = (bytes + 7) & ~(size_t)7;
-    arena_block *b = a->head;
-    if (!b || b->cap - b->used < bytes) {
-        size_t cap = bytes > ARENA_BLOCK_BYTES ? bytes : ARENA_BLOCK_BYTES;
-        b = sg_alloc_array(1, sizeof *b + cap);
-        if (!b) {
-            set_failed(c);
-            return NULL;
-        }
-        b->next = a->head;
-        b->used = 0;
-        b->cap = cap;
-        a->head = b;
-    }
-    void *p = b->data + b->used;
-    b->used += bytes;
+    void *p = sg_arena_alloc(c->arena, bytes);
+    if (!p)
+        set_failed(c);
     return p;
 }
 
 /* A fresh leaf node (empty, zero box). */
 static bnode *node_alloc(build_ctx *c)
 {
-    arena *a = &c->arenas[omp_get_thread_num()];
-    bnode *b = a->free_nodes;
+    bnode **list = &c->free_nodes[omp_get_thread_num()];
+    bnode *b = *list;
     if (b)
-        a->free_nodes = b->u.inner.child[0];
+        *list = b->u.inner.child[0];
     else if (!(b = arena_alloc(c, sizeof *b)))
         return NULL;
     memset(b, 0, sizeof *b);
@@ -142,19 +116,9 @@ static bnode *node_alloc(build_ctx *c)
 
 static void node_release(build_ctx *c, bnode *b)
 {
-    arena *a = &c->arenas[omp_get_thread_num()];
-    b->u.inner.child[0] = a->free_nodes;
-    a->free_nodes = b;
-}
-
-static void arenas_free(arena *arenas, int count)
-{
-    for (int t = 0; arenas && t < count; ++t)
-        for (arena_block *b = arenas[t].head, *next; b; b = next) {
-            next = b->next;
-            sg_free(b);
-        }
-    sg_free(arenas);
+    bnode **list = &c->free_nodes[omp_get_thread_num()];
+    b->u.inner.child[0] = *list;
+    *list = b;
 }
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
@@ -478,11 +442,13 @@ sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err
 
     /* The parallel region below has at most omp_get_max_threads() threads. */
     const int threads = omp_get_max_threads();
-    c.arenas = sg_calloc_array((size_t)threads, sizeof *c.arenas);
+    c.arena = sg_arena_set_create(threads);
+    c.free_nodes = sg_calloc_array((size_t)threads, sizeof *c.free_nodes);
     uint32_t *all = sg_alloc_array(d->count, sizeof *all);
-    if (!all || !c.arenas) {
+    if (!all || !c.arena || !c.free_nodes) {
         sg_free(all);
-        arenas_free(c.arenas, threads);
+        sg_arena_set_destroy(c.arena);
+        sg_free(c.free_nodes);
         return sg_error_set(err, SG_ERR_NOMEM, "kd-tree: out of memory for %zu primitives", d->count);
     }
     for (size_t i = 0; i < d->count; ++i)
@@ -534,7 +500,8 @@ sg_status sg_kdtree_build(const sg_kdtree_desc *d, sg_kdtree *out, sg_error *err
     *out = t;
 
 cleanup:
-    arenas_free(c.arenas, threads);
+    sg_arena_set_destroy(c.arena);
+    sg_free(c.free_nodes);
     return st;
 }
 
