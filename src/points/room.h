@@ -22,7 +22,8 @@
  *
  * Ownership: *out is allocated with sg_alloc_array (free with
  * sg_mesh_free). Errors: SG_ERR_INVALID_ARG (a wall thickness that is not
- * finite and in (0, 1]), SG_ERR_NOMEM. *out is written only on SG_OK.
+ * finite and in (0, 1], a cell size that is negative or not finite),
+ * SG_ERR_NOMEM. *out is written only on SG_OK.
  * (A window wall as thick as the room's while the others are thin gives
  * a room lit exactly as the thick one through the same window: the
  * stability map's thin_wall case.)
@@ -45,6 +46,11 @@ typedef struct sg_room_desc {
                            SG_ROOM_WALL                                   */
     float window_wall;  /* thickness of the +X wall (the window's depth);
                            default: wall                                  */
+    float cell;         /* each rectangle as a grid of cells no larger than
+                           this (world units), two triangles a cell, so
+                           light stored at vertices (the hybrid surface)
+                           has that resolution; default 0: two triangles
+                           a rectangle (what sampling to points needs)    */
 } sg_room_desc;
 
 /* d may be NULL (defaults). */

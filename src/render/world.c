@@ -85,8 +85,9 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
  * bake stores light at vertices: "ground" a 30 x 30 square of
  * side x side cells (side = round(sqrt(points)), default 128), "sphere"
  * the unit sphere with rings = round(sqrt(points / 2)) bands (default
- * 224: 100k triangles), "room" as points/room.h builds it (large faces:
- * its light is interpolated across each face). */
+ * 224: 100k triangles), "room" as points/room.h builds it in cells of
+ * sqrt(162 m^2 / points) (default 250k: cells of 0.025): in each case
+ * about `points` vertices, as many light sites as splats. */
 static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh *out, sg_error *err)
 {
     switch (m->kind) {
@@ -106,8 +107,13 @@ static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh 
                                          : 224;
         return sg_mesh_make_sphere(rings, 2 * rings, sg_v3(0, 0, 0), 1.0f, out, err);
     }
-    case SG_SCENE_MODEL_ROOM:
-        return sg_room_mesh(NULL, out, err);
+    case SG_SCENE_MODEL_ROOM: {
+        /* about `points` vertices over the walls' ~162 m^2 (inside 72,
+         * outside 90) */
+        double n = m->points.points > 0 ? (double)m->points.points : 250000.0;
+        sg_room_desc rd = {.cell = (float)fmax(0.005, sqrt(162.0 / n))};
+        return sg_room_mesh(&rd, out, err);
+    }
     default:
         return sg_error_set(err, SG_ERR_INVALID_ARG, "$.models[%zu]: unknown model kind %d", index, (int)m->kind);
     }

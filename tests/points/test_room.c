@@ -24,8 +24,11 @@ static void test_room_mesh_closed(void **state)
 {
     (void)state;
     const float walls[] = {0.2f, 0.05f, 0.04f}, window_walls[] = {0.0f, 0.0f, 0.2f};
-    for (int k = 0; k < 3; ++k) {
-        sg_room_desc d = {.wall = walls[k], .window_wall = window_walls[k]};
+    /* k = 3: the default walls as grids of cells (the hybrid surface's
+     * room): the same closed boundary in more triangles */
+    for (int k = 0; k < 4; ++k) {
+        sg_room_desc d = k < 3 ? (sg_room_desc){.wall = walls[k], .window_wall = window_walls[k]}
+                               : (sg_room_desc){.cell = 0.3f};
         sg_mesh m;
         assert_int_equal(sg_room_mesh(&d, &m, NULL), SG_OK);
         double vol = 0.0;
@@ -41,7 +44,10 @@ static void test_room_mesh_closed(void **state)
             const float *vn = m.normals + 3 * m.triangles[3 * t];
             assert_true(n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2] > 0.0);
         }
-        double w = walls[k], wx = window_walls[k] > 0.0f ? window_walls[k] : w, H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT;
+        if (k == 3) /* 4 x 4 floor in cells of 0.3: 14 x 14 cells */
+            assert_true(m.triangle_count > 2 * 14 * 14);
+        double w = k < 3 ? walls[k] : SG_ROOM_WALL;
+        double wx = k < 3 && window_walls[k] > 0.0f ? window_walls[k] : w, H = SG_ROOM_HALF, T = SG_ROOM_HEIGHT;
         double expect = (2.0 * H + w + wx) * 2.0 * (H + w) * (T + 2.0 * w) - 4.0 * H * H * T -
                         2.0 * SG_ROOM_WINDOW_Z * (SG_ROOM_WINDOW_Y1 - SG_ROOM_WINDOW_Y0) * wx;
         if (!(fabs(vol - expect) < 1e-5 * expect))
@@ -53,6 +59,9 @@ static void test_room_mesh_closed(void **state)
     sg_error err = {0};
     assert_int_equal(sg_room_mesh(&bad, &m, &err), SG_ERR_INVALID_ARG);
     assert_non_null(strstr(err.message, "wall thickness"));
+    sg_room_desc bad_cell = {.cell = NAN};
+    assert_int_equal(sg_room_mesh(&bad_cell, &m, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "cell size"));
 }
 
 static sg_vec3 random_dir(uint64_t *rng)
@@ -121,6 +130,9 @@ static void check_room_holds_rays(const char *model)
 }
 static void test_room_holds_rays_mls(void **state) { (void)state; check_room_holds_rays("mls"); }
 static void test_room_holds_rays_disk(void **state) { (void)state; check_room_holds_rays("disk"); }
+/* As triangles (cells of sqrt(162 / 20000) = 0.09): watertight also where
+ * the window wall's pieces meet the floor's edge in T-junctions. */
+static void test_room_holds_rays_hybrid(void **state) { (void)state; check_room_holds_rays("hybrid"); }
 
 int main(void)
 {
@@ -128,6 +140,7 @@ int main(void)
         cmocka_unit_test(test_room_mesh_closed),
         cmocka_unit_test(test_room_holds_rays_mls),
         cmocka_unit_test(test_room_holds_rays_disk),
+        cmocka_unit_test(test_room_holds_rays_hybrid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
