@@ -661,7 +661,7 @@ static void write_md(FILE *f, const void *ctx)
 {
     (void)ctx;
     fprintf(f, "# Hybrid point/triangle hierarchy vs Embree 3 triangles\n\n");
-    fprintf(f, "Written by `scripts/bench-hybrid.sh` (bench/bench_hybrid.c); see docs/hybrid.md.\n\n");
+    fprintf(f, "Written by `build/bench/bench_hybrid --md docs/bench_hybrid.md` (bench/bench_hybrid.c); see docs/hybrid.md.\n\n");
     fprintf(f, "Machine: %s, nproc %d; %d threads used. Embree %s (build quality HIGH).\n", rep.machine, rep.nproc,
             rep.threads, embree_tris_version());
     const char *mesh = strstr(rep.mesh, "shared/data/");
