@@ -304,6 +304,10 @@ static sg_status interpolate(sg_bake_job *j, sg_error *err)
                     o[c] = isfinite(r) && r > 0.0f ? r : 0.0f; /* bake.c invariant 1 */
                     o[3 + c] = isfinite(ind) && ind > 0.0f ? ind : 0.0f;
                 }
+        /* Sites made of others (the hybrid's nodes) from their final light:
+         * means of non-negative finite values keep invariant 1. */
+        if (st == SG_OK)
+            sg_scene_filter_sites(sg_world_scene(j->w, (uint32_t)m), E, SG_BAKE_SPLAT_FLOATS);
     }
     sg_free(vals);
     sg_free(out);

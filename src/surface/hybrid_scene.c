@@ -10,6 +10,7 @@
  */
 #include "surface/hybrid_scene.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -257,6 +258,59 @@ sg_ray sg_hybrid_scene_spawn_ray(const sg_hybrid *h, const sg_hybrid_sites *s, c
         r.self_r = s->view.radius[hit->splat];
     }
     return r;
+}
+
+enum { FILTER_MAX = 16 };
+
+/* Sums over node k's triangles of area x (vertex mean) into acc; writes
+ * the node's mean; returns its area. Recursion depth: the tree's, <=
+ * SG_STREE_MAX_DEPTH bundles (sphere_tree.h invariant 3). */
+static double filter_node(const sg_hybrid *h, uint32_t k, float *values, size_t stride, double *acc)
+{
+    const uint32_t word = h->tree.bundles[k / SG_STREE_WIDTH].child[k % SG_STREE_WIDTH];
+    double area = 0.0;
+    for (size_t c = 0; c < stride; ++c)
+        acc[c] = 0.0;
+    if (word == SG_STREE_EMPTY)
+        return 0.0;
+    if (sg_stree_is_leaf(word)) {
+        const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+        for (uint32_t i = first; i < first + count; ++i) {
+            const uint32_t *v = h->tri + 3 * (size_t)i;
+            const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
+            double e1[3], e2[3];
+            for (int q = 0; q < 3; ++q) {
+                e1[q] = (double)b[q] - a[q];
+                e2[q] = (double)c[q] - a[q];
+            }
+            double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+                   nz = e1[0] * e2[1] - e1[1] * e2[0];
+            double ar = 0.5 * sqrt(nx * nx + ny * ny + nz * nz);
+            for (size_t ch = 0; ch < stride; ++ch)
+                acc[ch] += ar * ((double)values[v[0] * stride + ch] + values[v[1] * stride + ch] +
+                                 values[v[2] * stride + ch]) / 3.0;
+            area += ar;
+        }
+    } else {
+        double sub[FILTER_MAX];
+        for (uint32_t l = 0; l < SG_STREE_WIDTH; ++l) {
+            area += filter_node(h, word * SG_STREE_WIDTH + l, values, stride, sub);
+            for (size_t c = 0; c < stride; ++c)
+                acc[c] += sub[c];
+        }
+    }
+    if (area > 0.0)
+        for (size_t c = 0; c < stride; ++c)
+            values[(h->vertex_count + k) * stride + c] = (float)(acc[c] / area);
+    return area;
+}
+
+void sg_hybrid_sites_filter(const sg_hybrid *h, const sg_hybrid_sites *s, float *values, size_t stride)
+{
+    assert(stride >= 1 && stride <= FILTER_MAX && s->vertex_count == h->vertex_count);
+    (void)s;
+    double acc[FILTER_MAX];
+    filter_node(h, 0, values, stride, acc); /* node 0: the root (bundle 0, lane 0) */
 }
 
 sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit)

@@ -23,7 +23,9 @@
  * reach of its longest traced edge; site vertex_count + k is node k's disk
  * (centre, mean normal, reach its sphere radius), filled in by the bake
  * like any site (its light is then the bake's interpolation of the sample
- * points around the disk: a filter over the node's area). Sites no hit
+ * points around the disk), then replaced by the area-weighted mean of its
+ * triangles' vertex light (sg_hybrid_sites_filter, which the bake runs
+ * through sg_scene_filter_sites), as Ye filters colours into nodes. Sites no hit
  * can read (vertices no traced triangle uses, empty node slots, nodes
  * whose normal cone is too wide to be hit as a point) stand in as copies
  * of the first real vertex site, so every site is a valid surface point
@@ -79,6 +81,14 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
  * diameter; a site hit at a vertex names its vertex normal and reach). */
 sg_ray sg_hybrid_scene_spawn_ray(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit, sg_vec3 dir,
                                  float tmax);
+
+/* Ye's filtered point attributes for light: node site k's `stride`
+ * values become the area-weighted mean over its triangles of each
+ * triangle's vertex mean, from the vertex sites' values (the first
+ * vertex_count rows of values, stride floats a site). Every non-empty
+ * node is written; vertex rows are read only. stride <= 16.
+ * Deterministic (one fixed-order pass, sums in double). */
+void sg_hybrid_sites_filter(const sg_hybrid *h, const sg_hybrid_sites *s, float *values, size_t stride);
 
 /* The sites' colours blended with the hit's weights; (1, 1, 1) for a miss. */
 sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit);

@@ -559,6 +559,12 @@ int sg_scene_hit_sites_reference(const sg_scene *sc, const sg_hit *hit, uint32_t
     return hit_weights(sc, hit, ids, weights, max, 0);
 }
 
+void sg_scene_filter_sites(const sg_scene *sc, float *values, size_t stride)
+{
+    if (sc->hybrid)
+        sg_hybrid_sites_filter(sc->hybrid, &sc->hybrid_sites, values, stride);
+}
+
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }
 
 const sg_sites *sg_scene_sites(const sg_scene *sc) { return &sc->sites; }

@@ -182,6 +182,14 @@ sg_hit sg_scene_site_hit(const sg_scene *scene, uint32_t site);
  * rows) is indexed by it. */
 uint32_t sg_scene_hit_site(const sg_scene *scene, const sg_hit *hit);
 
+/* Sites whose light derives from other sites' get it recomputed from
+ * theirs: values holds `stride` floats per site (sites.h order; stride <=
+ * 16). The hybrid's node sites become the area-weighted mean of their
+ * triangles' vertex values (hybrid_scene.h), Ye's filtered attributes
+ * for level-of-detail hits; every other model has none (no-op). The bake
+ * runs it on its final light. */
+void sg_scene_filter_sites(const sg_scene *scene, float *values, size_t stride);
+
 /* The scalar reference of sg_scene_hit_sites: every splat of the leaf
  * weighed, where sg_scene_hit_sites first drops, 8 at a time, the splats
  * whose squared distance ratio is clearly >= 1. Same result bit for bit

@@ -40,6 +40,11 @@
  *                                  point model, a point-cloud file as a
  *                                  hybrid model: INVALID_ARG naming the
  *                                  file or the cause.
+ * 12. hybrid::filter_nodes       sg_scene_filter_sites: a constant stays
+ *                                  constant in every node; on the field
+ *                                  f(p) = p.y the value a LOD hit reads lies
+ *                                  within its node's diameter of f(hit);
+ *                                  the plane's root is its centroid's f.
  */
 #include "test_support.h"
 
@@ -751,6 +756,66 @@ static void test_hybrid_scene_errors(void **state)
     sg_scene_file_free(&sf);
 }
 
+static void test_hybrid_filter_nodes(void **state)
+{
+    (void)state;
+    sg_mesh m = fine_sphere();
+    sg_scene *sc = mesh_scene(&m, 2.0f);
+    const sg_sites *st = sg_scene_sites(sc);
+    const size_t n = st->count, nv = m.vertex_count;
+    float *v = sg_alloc_array(n, 2 * sizeof(float));
+    assert_non_null(v);
+    for (size_t i = 0; i < n; ++i) {
+        v[2 * i] = i < nv ? 0.25f : -1.0f; /* nodes: garbage the filter must replace */
+        v[2 * i + 1] = i < nv ? st->py[i] : -100.0f;
+    }
+    sg_scene_filter_sites(sc, v, 2);
+    size_t lod = 0;
+    /* every node the hierarchy has (a radius) got the constant: a mean of
+     * equal values, to float rounding of the double sum */
+    sg_hybrid *h = build(&m, 0);
+    for (size_t k = 0; k < n - nv; ++k)
+        if (sg_hybrid_node_radius(h, (uint32_t)k) > 0.0f && !(fabsf(v[2 * (nv + k)] - 0.25f) <= 1e-7f))
+            fail_msg("node %zu: filtered constant %g (0.25)", k, (double)v[2 * (nv + k)]);
+    for (int y = 0; y < FRAME; ++y)
+        for (int x = 0; x < FRAME; ++x) {
+            sg_ray r = camera_ray(x, y);
+            r.spread = 2.0f * TAN_HALF / FRAME;
+            sg_hit hit;
+            if (!sg_scene_intersect(sc, &r, &hit, NULL) || hit.leaf != SG_INVALID_ID)
+                continue;
+            ++lod;
+            uint32_t id;
+            float w;
+            assert_int_equal(sg_scene_hit_sites(sc, &hit, &id, &w, 1), 1);
+            /* f is 1-Lipschitz: the node's triangles and the hit both lie in
+             * its sphere, so their mean differs from f(hit) by < 2R */
+            float R = sg_hybrid_node_radius(h, (uint32_t)(id - nv));
+            if (!(fabsf(v[2 * id + 1] - hit.p.y) < 2.0f * R))
+                fail_msg("LOD hit at y = %g reads %g from node %u of radius %g", (double)hit.p.y,
+                         (double)v[2 * id + 1], id - (uint32_t)nv, (double)R);
+        }
+    assert_true(lod > 0);
+    sg_hybrid_destroy(h);
+    sg_free(v);
+    sg_scene_destroy(sc);
+    sg_mesh_free(&m);
+
+    /* The plane [-1, 1]^2: the root's value of f = x + 2 is the centroid's, 2. */
+    assert_int_equal(sg_mesh_make_plane(8, 1.0f, &m, NULL), SG_OK);
+    sc = mesh_scene(&m, 1.0f);
+    st = sg_scene_sites(sc);
+    float *u = sg_alloc_array(st->count, sizeof(float));
+    assert_non_null(u);
+    for (size_t i = 0; i < st->count; ++i)
+        u[i] = i < m.vertex_count ? st->px[i] + 2.0f : 0.0f;
+    sg_scene_filter_sites(sc, u, 1);
+    assert_float_equal(u[m.vertex_count], 2.0f, 1e-6f);
+    sg_free(u);
+    sg_scene_destroy(sc);
+    sg_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -765,6 +830,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_kernels_agree),
         cmocka_unit_test(test_hybrid_scene_interface),
         cmocka_unit_test(test_hybrid_scene_errors),
+        cmocka_unit_test(test_hybrid_filter_nodes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
