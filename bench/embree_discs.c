@@ -7,10 +7,11 @@
  *  2. A frame does the work sg_render_frame does per pixel in
  *     SG_SHADE_SIMPLE mode: one sg_camera_ray, one intersection, the same
  *     shading and the same tile schedule; only the intersector differs.
- *  3. held_bytes is only changed by Embree's memory monitor; it is read
- *     after rtcCommitScene returns, when no build runs.
+ *  3. the device, scene, build time and memory are embree_device.h's.
  */
 #include "embree_discs.h"
+
+#include "embree_device.h"
 
 #include <embree3/rtcore.h>
 #include <math.h>
@@ -25,34 +26,14 @@
 #define TILE 16
 
 struct embree_discs {
-    RTCDevice device;              /* owns the scene                         */
-    RTCScene scene;                /* one committed disc geometry            */
+    embree_device dev;             /* invariant 3                            */
     size_t count;                  /* discs                                  */
     float *ar, *ag, *ab;           /* albedo copies, sg_alloc_array          */
-    double build_seconds;          /* rtcCommitScene wall time               */
-    size_t memory_bytes;           /* held_bytes after the commit            */
-    atomic_llong held_bytes;       /* invariant 3: memory monitor total      */
-    char error[SG_ERROR_MESSAGE_MAX]; /* first Embree error message, or ""    */
 };
-
-static void embree__on_error(void *user, enum RTCError code, const char *str)
-{
-    struct embree_discs *e = user;
-    if (e->error[0] == '\0')
-        snprintf(e->error, sizeof e->error, "embree error %d: %s", (int)code, str ? str : "?");
-}
-
-static bool embree__on_memory(void *user, ssize_t bytes, bool post)
-{
-    (void)post;
-    struct embree_discs *e = user;
-    atomic_fetch_add(&e->held_bytes, (long long)bytes);
-    return true; /* never refuse an allocation */
-}
 
 static sg_status embree__fail(embree_discs *e, sg_status st, sg_error *err, const char *what)
 {
-    sg_error_set(err, st, "embree_discs: %s%s%s", what, e->error[0] ? ": " : "", e->error);
+    sg_error_set(err, st, "embree_discs: %s%s%s", what, e->dev.error[0] ? ": " : "", e->dev.error);
     embree_discs_destroy(e);
     return st;
 }
@@ -68,7 +49,6 @@ sg_status embree_discs_create(const sg_pointset *points, int threads, embree_dis
     embree_discs *e = sg_calloc_array(1, sizeof *e);
     if (!e)
         return sg_error_set(err, SG_ERR_NOMEM, "embree_discs: out of memory");
-    atomic_init(&e->held_bytes, 0);
     size_t n = points->count;
     e->count = n;
     e->ar = sg_alloc_array(n, sizeof(float));
@@ -82,19 +62,11 @@ sg_status embree_discs_create(const sg_pointset *points, int threads, embree_dis
     memcpy(e->ag, points->ag, n * sizeof(float));
     memcpy(e->ab, points->ab, n * sizeof(float));
 
-    char config[64] = "";
-    if (threads > 0)
-        snprintf(config, sizeof config, "threads=%d", threads);
-    e->device = rtcNewDevice(config);
-    if (!e->device)
-        return embree__fail(e, SG_ERR_UNSUPPORTED, err, "rtcNewDevice failed");
-    rtcSetDeviceErrorFunction(e->device, embree__on_error, e);
-    rtcSetDeviceMemoryMonitorFunction(e->device, embree__on_memory, e);
-
-    e->scene = rtcNewScene(e->device);
-    RTCGeometry g = rtcNewGeometry(e->device, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
-    if (!e->scene || !g)
-        return embree__fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the scene or geometry");
+    if (!embree_device_open(&e->dev, threads))
+        return embree__fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the device or scene");
+    RTCGeometry g = rtcNewGeometry(e->dev.device, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
+    if (!g)
+        return embree__fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the geometry");
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
                                        4 * sizeof(float), n);
     float *nrm = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3,
@@ -112,19 +84,8 @@ sg_status embree_discs_create(const sg_pointset *points, int threads, embree_dis
         nrm[3 * i + 1] = points->ny[i];
         nrm[3 * i + 2] = points->nz[i];
     }
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(e->scene, g);
-    rtcReleaseGeometry(g);
-    rtcSetSceneFlags(e->scene, RTC_SCENE_FLAG_NONE);
-    rtcSetSceneBuildQuality(e->scene, RTC_BUILD_QUALITY_HIGH);
-
-    double t0 = omp_get_wtime();
-    rtcCommitScene(e->scene);
-    e->build_seconds = omp_get_wtime() - t0;
-    if (rtcGetDeviceError(e->device) != RTC_ERROR_NONE || e->error[0])
+    if (!embree_device_commit(&e->dev, g, RTC_BUILD_QUALITY_HIGH))
         return embree__fail(e, SG_ERR_UNSUPPORTED, err, "rtcCommitScene failed");
-    long long held = atomic_load(&e->held_bytes);
-    e->memory_bytes = held > 0 ? (size_t)held : 0;
     *out = e;
     return SG_OK;
 }
@@ -133,10 +94,7 @@ void embree_discs_destroy(embree_discs *e)
 {
     if (!e)
         return;
-    if (e->scene)
-        rtcReleaseScene(e->scene);
-    if (e->device)
-        rtcReleaseDevice(e->device);
+    embree_device_close(&e->dev);
     sg_free(e->ar);
     sg_free(e->ag);
     sg_free(e->ab);
@@ -145,8 +103,8 @@ void embree_discs_destroy(embree_discs *e)
 
 const char *embree_discs_version(void) { return RTC_VERSION_STRING; }
 
-double embree_discs_build_seconds(const embree_discs *e) { return e->build_seconds; }
-size_t embree_discs_memory_bytes(const embree_discs *e) { return e->memory_bytes; }
+double embree_discs_build_seconds(const embree_discs *e) { return e->dev.build_seconds; }
+size_t embree_discs_memory_bytes(const embree_discs *e) { return e->dev.memory_bytes; }
 
 /* One pixel: invariant 2 (render.c shade_pixel, SG_SHADE_SIMPLE). */
 static int embree__pixel(const embree_discs *e, const sg_ray *r, float *rgb)
@@ -168,7 +126,7 @@ static int embree__pixel(const embree_discs *e, const sg_ray *r, float *rgb)
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(e->scene, &ctx, &rh);
+    rtcIntersect1(e->dev.scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         rgb[0] = 0.1f;
         rgb[1] = 0.1f;

@@ -7,10 +7,11 @@
  *  2. A frame does per pixel what bench_hybrid's splatgi frame does: one
  *     sg_camera_ray, one intersection, the same shading and the same tile
  *     schedule; only the intersector differs.
- *  3. held_bytes is changed only by Embree's memory monitor; it is read
- *     after rtcCommitScene returns.
+ *  3. the device, scene, build time and memory are embree_device.h's.
  */
 #include "embree_tris.h"
+
+#include "embree_device.h"
 
 #include <embree3/rtcore.h>
 #include <math.h>
@@ -25,35 +26,15 @@
 #define TILE 16 /* the same tiles as bench_hybrid's splatgi frame */
 
 struct embree_tris {
-    RTCDevice device;
-    RTCScene scene;
+    embree_device dev;           /* invariant 3                             */
     size_t vertex_count;
     float *normals;              /* 3 per vertex, sg_alloc_array           */
     uint32_t *tris;              /* copy of the index buffer for shading   */
-    double build_seconds;
-    size_t memory_bytes;
-    atomic_llong held_bytes;     /* invariant 3                             */
-    char error[SG_ERROR_MESSAGE_MAX];
 };
-
-static void on_error(void *user, enum RTCError code, const char *str)
-{
-    struct embree_tris *e = user;
-    if (e->error[0] == '\0')
-        snprintf(e->error, sizeof e->error, "embree error %d: %s", (int)code, str ? str : "?");
-}
-
-static bool on_memory(void *user, ssize_t bytes, bool post)
-{
-    (void)post;
-    struct embree_tris *e = user;
-    atomic_fetch_add(&e->held_bytes, (long long)bytes);
-    return true;
-}
 
 static sg_status fail(embree_tris *e, sg_status st, sg_error *err, const char *what)
 {
-    sg_error_set(err, st, "embree_tris: %s%s%s", what, e->error[0] ? ": " : "", e->error);
+    sg_error_set(err, st, "embree_tris: %s%s%s", what, e->dev.error[0] ? ": " : "", e->dev.error);
     embree_tris_destroy(e);
     return st;
 }
@@ -66,7 +47,6 @@ sg_status embree_tris_create(const sg_mesh *m, const float *normals, embree_tris
     embree_tris *e = sg_calloc_array(1, sizeof *e);
     if (!e)
         return sg_error_set(err, SG_ERR_NOMEM, "embree_tris: out of memory");
-    atomic_init(&e->held_bytes, 0);
     e->vertex_count = m->vertex_count;
     e->normals = sg_alloc_array(m->vertex_count, 3 * sizeof(float));
     e->tris = sg_alloc_array(m->triangle_count, 3 * sizeof(uint32_t));
@@ -76,18 +56,11 @@ sg_status embree_tris_create(const sg_mesh *m, const float *normals, embree_tris
     }
     memcpy(e->normals, normals, m->vertex_count * 3 * sizeof(float));
     memcpy(e->tris, m->triangles, m->triangle_count * 3 * sizeof(uint32_t));
-    char config[64] = "";
-    if (threads > 0)
-        snprintf(config, sizeof config, "threads=%d", threads);
-    e->device = rtcNewDevice(config);
-    if (!e->device)
-        return fail(e, SG_ERR_UNSUPPORTED, err, "rtcNewDevice failed");
-    rtcSetDeviceErrorFunction(e->device, on_error, e);
-    rtcSetDeviceMemoryMonitorFunction(e->device, on_memory, e);
-    e->scene = rtcNewScene(e->device);
-    RTCGeometry g = rtcNewGeometry(e->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    if (!e->scene || !g)
-        return fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the scene or geometry");
+    if (!embree_device_open(&e->dev, threads))
+        return fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the device or scene");
+    RTCGeometry g = rtcNewGeometry(e->dev.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!g)
+        return fail(e, SG_ERR_UNSUPPORTED, err, "cannot make the geometry");
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                        m->vertex_count);
     uint32_t *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
@@ -98,19 +71,9 @@ sg_status embree_tris_create(const sg_mesh *m, const float *normals, embree_tris
     }
     memcpy(v, m->positions, m->vertex_count * 3 * sizeof(float)); /* invariant 1 */
     memcpy(ix, m->triangles, m->triangle_count * 3 * sizeof(uint32_t));
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(e->scene, g);
-    rtcReleaseGeometry(g);
-    rtcSetSceneFlags(e->scene, RTC_SCENE_FLAG_NONE);
-    rtcSetSceneBuildQuality(e->scene, quality == EMBREE_TRIS_MEDIUM ? RTC_BUILD_QUALITY_MEDIUM
-                                                                     : RTC_BUILD_QUALITY_HIGH);
-    double t0 = omp_get_wtime();
-    rtcCommitScene(e->scene);
-    e->build_seconds = omp_get_wtime() - t0;
-    if (rtcGetDeviceError(e->device) != RTC_ERROR_NONE || e->error[0])
+    if (!embree_device_commit(&e->dev, g, quality == EMBREE_TRIS_MEDIUM ? RTC_BUILD_QUALITY_MEDIUM
+                                                                          : RTC_BUILD_QUALITY_HIGH))
         return fail(e, SG_ERR_UNSUPPORTED, err, "rtcCommitScene failed");
-    long long held = atomic_load(&e->held_bytes);
-    e->memory_bytes = held > 0 ? (size_t)held : 0;
     *out = e;
     return SG_OK;
 }
@@ -119,18 +82,15 @@ void embree_tris_destroy(embree_tris *e)
 {
     if (!e)
         return;
-    if (e->scene)
-        rtcReleaseScene(e->scene);
-    if (e->device)
-        rtcReleaseDevice(e->device);
+    embree_device_close(&e->dev);
     sg_free(e->normals);
     sg_free(e->tris);
     sg_free(e);
 }
 
 const char *embree_tris_version(void) { return RTC_VERSION_STRING; }
-double embree_tris_build_seconds(const embree_tris *e) { return e->build_seconds; }
-size_t embree_tris_memory_bytes(const embree_tris *e) { return e->memory_bytes; }
+double embree_tris_build_seconds(const embree_tris *e) { return e->dev.build_seconds; }
+size_t embree_tris_memory_bytes(const embree_tris *e) { return e->dev.memory_bytes; }
 
 static double cpu_now(void)
 {
@@ -159,7 +119,7 @@ static int pixel(const embree_tris *e, const sg_ray *r, float *rgb, uint32_t *id
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(e->scene, &ctx, &rh);
+    rtcIntersect1(e->dev.scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         rgb[0] = 0.1f;
         rgb[1] = 0.1f;
