@@ -79,8 +79,8 @@ static cJSON *model_json(const sg_scene_model *m)
     cJSON_AddItemToObject(mat, "emission", vec(m->material.emission));
     cJSON_AddBoolToObject(mat, "use_point_colors", m->material.use_point_colors);
     cJSON *sur = cJSON_AddObjectToObject(o, "surface");
-    static const char *const model_names[] = {"mls", "disk", "iso"};
-    cJSON_AddStringToObject(sur, "model", model_names[m->surface.model]);
+    static const char *const model_names[] = {"mls", "disk", "iso", "hybrid"};
+    cJSON_AddStringToObject(sur, "model", (size_t)m->surface.model < 4 ? model_names[m->surface.model] : "?");
     cJSON_AddStringToObject(sur, "kernel", m->surface.kernel == SG_KERNEL_GAUSSIAN ? "gaussian" : "hat");
     cJSON_AddNumberToObject(sur, "samples_per_cell", m->surface.samples_per_cell);
     if (m->surface.iso_tolerance > 0.0f)
@@ -91,6 +91,8 @@ static cJSON *model_json(const sg_scene_model *m)
         cJSON_AddItemToObject(sur, "iso_leaf_radii", num(m->surface.iso_leaf_radii));
     if (m->surface.iso_lod != 0.0f)
         cJSON_AddItemToObject(sur, "iso_lod", num(m->surface.iso_lod > 0.0f ? m->surface.iso_lod : 0.0f));
+    if (m->surface.hybrid_lod != 0.0f) /* the file's 0 is full detail, the desc's negative */
+        cJSON_AddItemToObject(sur, "hybrid_lod", num(m->surface.hybrid_lod > 0.0f ? m->surface.hybrid_lod : 0.0f));
     cJSON *r = cJSON_AddObjectToObject(sur, "refinements");
     cJSON_AddBoolToObject(r, "shrink", !(m->surface.kd_disable & SG_KD_NO_SHRINK));
     cJSON_AddBoolToObject(r, "encourage", !(m->surface.kd_disable & SG_KD_NO_ENCOURAGE));

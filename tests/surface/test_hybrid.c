@@ -45,6 +45,10 @@
  *                                  f(p) = p.y the value a LOD hit reads lies
  *                                  within its node's diameter of f(hit);
  *                                  the plane's root is its centroid's f.
+ * 13. hybrid::scene_file_roundtrip  "model": "hybrid" with "hybrid_lod" 2, 0
+ *                                  (full detail) and absent: parsed as
+ *                                  2, -1, the default; written and read
+ *                                  back the same, hash for hash.
  */
 #include "test_support.h"
 
@@ -816,6 +820,34 @@ static void test_hybrid_filter_nodes(void **state)
     sg_mesh_free(&m);
 }
 
+static void test_hybrid_scene_file_roundtrip(void **state)
+{
+    (void)state;
+    const char *json = "{\"models\":[{\"builtin\":\"ground\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":2}},"
+                       "{\"builtin\":\"sphere\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":0}},"
+                       "{\"builtin\":\"bunny\",\"surface\":{\"model\":\"hybrid\"}}]}";
+    sg_scene_file sf, back;
+    sg_error err = {0};
+    assert_int_equal(sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err), SG_OK);
+    const float want[3] = {2.0f, -1.0f, 0.0f};
+    for (int k = 0; k < 3; ++k) {
+        assert_int_equal(sf.models[k].surface.model, SG_SURFACE_HYBRID);
+        assert_float_equal(sf.models[k].surface.hybrid_lod, want[k], 0.0f);
+    }
+    char path[700];
+    snprintf(path, sizeof path, "%s/hybrid_scene.json", sg_test_tmpdir());
+    assert_int_equal(sg_scene_file_write(&sf, path, &err), SG_OK);
+    if (sg_scene_file_load(path, &back, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    for (int k = 0; k < 3; ++k) {
+        assert_int_equal(back.models[k].surface.model, SG_SURFACE_HYBRID);
+        assert_float_equal(back.models[k].surface.hybrid_lod, want[k], 0.0f);
+    }
+    assert_true(sg_scene_file_hash(&back, SG_SCENE_HASH_ALL) == sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL));
+    sg_scene_file_free(&back);
+    sg_scene_file_free(&sf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -831,6 +863,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_scene_interface),
         cmocka_unit_test(test_hybrid_scene_errors),
         cmocka_unit_test(test_hybrid_filter_nodes),
+        cmocka_unit_test(test_hybrid_scene_file_roundtrip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
