@@ -270,7 +270,7 @@ static const bad_case BAD[] = {
     {M0 "'transform': {'rotate': [0, 90, 0]}}]}",
      "scene.json: $.models[0].transform.rotate: unknown key (expected one of: up, translate, rotate_deg, scale)"},
     {M0 "'surface': {'model': 'splat'}}]}",
-     "scene.json: $.models[0].surface.model: expected one of 'mls', 'disk', 'iso', got 'splat'"},
+     "scene.json: $.models[0].surface.model: expected one of 'mls', 'disk', 'iso', 'hybrid', got 'splat'"},
     {M0 "'surface': {'refinements': {'shrnk': false}}}]}",
      "scene.json: $.models[0].surface.refinements.shrnk: unknown key (expected one of: shrink, encourage, "
      "collapse)"},
