@@ -56,6 +56,8 @@ struct sg_iso {
     int16_t *cf;
     uint32_t *cn;
     sg_iso_info info;    /* filled at the end of the build                   */
+    int borrowed;        /* 1: nodes, leaves, cf, cn belong to a world file's
+                            map (scene_store.c); destroy frees the struct only */
 };
 
 static inline float iso_coord(float lo, float unit, uint32_t i) { return lo + (float)i * unit; }
