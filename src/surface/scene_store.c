@@ -193,8 +193,14 @@ void sg_scene_store_of(const sg_scene *sc, sg_scene_store *out)
     memset(out, 0, sizeof *out);
     sg_scene copy = *sc; /* shallow: scalars() reads fields only when saving */
     sg_iso iso_copy;
+    memset(&iso_copy, 0, sizeof iso_copy);
     if (sc->iso)
         iso_copy = *sc->iso;
+    /* The only value that differs between two builds of one scene: left
+     * out, so a world file is a function of its scene (DESIGN.md
+     * "Determinism"); a loaded scene says 0 s (it was not built). */
+    copy.info.build_seconds = 0.0;
+    iso_copy.info.build_seconds = 0.0;
     codec c = {.slot = out->scalars};
     scalars(&c, &copy, sc->iso ? &iso_copy : NULL);
 

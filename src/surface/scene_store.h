@@ -10,6 +10,9 @@
  * holds the very bytes the built one held and answers every query with the
  * same bits. Only the ISO's light sites are recomputed (a pass over the
  * leaves, sg_iso_sites_create, deterministic), not stored.
+ * The build's wall time is stored as 0 (a loaded scene's info says 0 s):
+ * it is the one value two builds of a scene differ in, so the store, and
+ * the world file, are a function of the scene.
  *
  * What it does NOT do: files, checksums, hashes (world_file.c does those);
  * byte order (host bytes, like the container: little-endian hosts).
