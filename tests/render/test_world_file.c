@@ -79,20 +79,7 @@ static int teardown(void **state)
     return 0;
 }
 
-static uint8_t *read_all(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    fclose(f);
-    *size = (size_t)n;
-    return buf;
-}
+static uint8_t *read_all(const char *path, size_t *size) { return sg_test_read_file(path, size); }
 
 /* Loads path for scene_a: the status, and the message in msg. */
 static sg_status try_load(const char *path, char *msg, size_t msg_size)
