@@ -252,14 +252,26 @@ static sg_status load_model(const sg_bake_file *f, const char *path, size_t i, s
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s: %" PRIu64 " scalars, expected %d", path, tag, items,
                             SG_SCENE_SCALARS);
     memcpy(store->scalars, data, sizeof store->scalars);
+    /* The arrays' CRCs are most of a load's time and independent: checked
+     * in parallel; the first failure in array order is reported, so the
+     * message does not depend on the thread count. */
+    sg_status ast[SG_SA_COUNT];
+    sg_error aerr[SG_SA_COUNT];
+#pragma omp parallel for schedule(dynamic, 1)
     for (int a = 0; a < SG_SA_COUNT; ++a) {
         const sg_scene_array_spec *sp = sg_scene_array_spec_of((sg_scene_array_id)a);
-        model_tag(tag, sp->code, i);
-        if (!sg_bake_file_find(f, tag))
-            continue; /* scene_store says whether this surface needs it */
-        if ((st = view(f, path, tag, bake_type(sp->elem), sp->per, &store->items[a], &store->data[a], err)) != SG_OK)
-            return st;
+        char atag[5];
+        model_tag(atag, sp->code, i);
+        ast[a] = SG_OK;
+        if (sg_bake_file_find(f, atag)) /* else scene_store says whether this surface needs it */
+            ast[a] = view(f, path, atag, bake_type(sp->elem), sp->per, &store->items[a], &store->data[a], &aerr[a]);
     }
+    for (int a = 0; a < SG_SA_COUNT; ++a)
+        if (ast[a] != SG_OK) {
+            if (err)
+                *err = aerr[a];
+            return ast[a];
+        }
     char label[4300];
     snprintf(label, sizeof label, "%s: model %zu", path, i);
     return sg_scene_from_store(store, label, out, err);
