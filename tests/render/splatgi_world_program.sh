@@ -61,4 +61,9 @@ grep -q "\-\-if-stale goes with --world" e6.log || { cat e6.log; fail "message (
 grep -q "building the world again" e7.log || { cat e7.log; fail "no rebuild said"; }
 cmp built.exr y.exr || fail "frame after rebuild differs"
 cmp w.sgworld d.sgworld || fail "the rebuilt world differs from the first"
+# ... and makes a missing one, the same bytes again (a world file is a
+# function of its scene).
+"$RENDER" scene.json --bake built.sgbake --world n.sgworld --if-stale --out z.exr > e8.log 2>&1 || { cat e8.log; fail "--if-stale, missing"; }
+cmp w.sgworld n.sgworld || fail "the world made by --if-stale differs from splatgi-world's"
+cmp built.exr z.exr || fail "frame with a new world differs"
 echo "ok"
