@@ -58,7 +58,7 @@ static void free_soa(sg_splat_soa *s)
     memset(s, 0, sizeof *s);
 }
 
-sg_status sg_scene__pack_leaves(sg_scene *sc, sg_error *err)
+static sg_status pack_leaves(sg_scene *sc, sg_error *err)
 {
     size_t n = sc->tree.ref_count ? sc->tree.ref_count : 1;
     sg_splat_soa *s = &sc->soa;
@@ -321,7 +321,7 @@ sg_status sg_scene_create(const sg_scene_desc *desc, const sg_pointset *points, 
         omp_set_num_threads(saved_threads);
     if (st != SG_OK)
         goto fail;
-    if ((st = sg_scene__pack_leaves(sc, err)) != SG_OK)
+    if ((st = pack_leaves(sc, err)) != SG_OK)
         goto fail;
     if (d.model == SG_SURFACE_MLS && (st = layer_keys(sc, err)) != SG_OK)
         goto fail;
@@ -358,8 +358,6 @@ void sg_scene_destroy(sg_scene *sc)
     if (!sc)
         return;
     if (sc->borrowed) { /* the arrays belong to a world file's map */
-        sc->soa.key = NULL; /* borrowed; the rest of the soa is gathered */
-        free_soa(&sc->soa);
         sg_iso_sites_free(&sc->iso_sites);
         sg_iso_destroy(sc->iso);
         sg_free(sc);

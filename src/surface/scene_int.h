@@ -22,18 +22,12 @@ struct sg_scene {
     sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
     sg_mls_params mls;
     sg_scene_info info;
-    int borrowed;         /* 1: points, tree, soa.key (and the ISO's
-                             arrays) point into memory the scene does not
-                             own (a world file's map, scene_store.c);
-                             destroy frees only what it allocated: the
-                             struct, the soa but its key, the ISO struct
-                             and the ISO sites                            */
+    int borrowed;         /* 1: points, tree, soa (and the ISO's arrays)
+                             point into memory the scene does not own (a
+                             world file's map, scene_store.c); destroy
+                             frees only what it allocated: the struct, the
+                             ISO struct and the ISO sites                 */
 };
-
-/* Fills sc->soa's px..id (not key) from sc->points by sc->tree.refs
- * (invariant 1 of scene.c): what sg_scene_create does after the kd-tree,
- * and sg_scene_from_store after a load. On failure the soa is empty. */
-sg_status sg_scene__pack_leaves(sg_scene *sc, sg_error *err);
 
 /* Deepest kd-tree a scene traverses: the traversal's fixed stack holds
  * one far child per level (scene.c STACK_SIZE = 128). */

@@ -29,7 +29,11 @@ static const sg_scene_array_spec SPECS[SG_SA_COUNT] = {
     [SG_SA_AG] = {"CG", SG_STORE_F32, 1},          [SG_SA_AB] = {"CB", SG_STORE_F32, 1},
     [SG_SA_KD_NODES] = {"KN", SG_STORE_U32, 2},    [SG_SA_KD_LEAF_FIRST] = {"KF", SG_STORE_U32, 1},
     [SG_SA_KD_REFS] = {"KR", SG_STORE_U32, 1},     [SG_SA_KD_LEAF_BOUNDS] = {"KB", SG_STORE_F32, 6},
-    [SG_SA_SOA_KEY] = {"SK", SG_STORE_U32, 1},
+    [SG_SA_SOA_PX] = {"SX", SG_STORE_F32, 1},      [SG_SA_SOA_PY] = {"SY", SG_STORE_F32, 1},
+    [SG_SA_SOA_PZ] = {"SZ", SG_STORE_F32, 1},      [SG_SA_SOA_NX] = {"SU", SG_STORE_F32, 1},
+    [SG_SA_SOA_NY] = {"SV", SG_STORE_F32, 1},      [SG_SA_SOA_NZ] = {"SW", SG_STORE_F32, 1},
+    [SG_SA_SOA_R] = {"SR", SG_STORE_F32, 1},       [SG_SA_SOA_INV_R] = {"SI", SG_STORE_F32, 1},
+    [SG_SA_SOA_ID] = {"SD", SG_STORE_U32, 1},      [SG_SA_SOA_KEY] = {"SK", SG_STORE_U32, 1},
     [SG_SA_ISO_NODES] = {"ON", SG_STORE_U32, 3},   [SG_SA_ISO_LEAVES] = {"OL", SG_STORE_U32, 9},
     [SG_SA_ISO_CF] = {"OF", SG_STORE_U16, 1},      [SG_SA_ISO_CN] = {"OC", SG_STORE_U32, 1},
 };
@@ -219,8 +223,13 @@ void sg_scene_store_of(const sg_scene *sc, sg_scene_store *out)
     put(out, SG_SA_KD_LEAF_FIRST, t->leaf_first, t->leaf_count + 1);
     put(out, SG_SA_KD_REFS, t->refs, t->ref_count);
     put(out, SG_SA_KD_LEAF_BOUNDS, t->leaf_bounds, t->leaf_count);
-    if (sc->soa.key) /* the rest of the soa is a gather, redone at load */
-        put(out, SG_SA_SOA_KEY, sc->soa.key, t->ref_count);
+    const sg_splat_soa *s = &sc->soa;
+    size_t r = t->ref_count;
+    put(out, SG_SA_SOA_PX, s->px, r), put(out, SG_SA_SOA_PY, s->py, r), put(out, SG_SA_SOA_PZ, s->pz, r);
+    put(out, SG_SA_SOA_NX, s->nx, r), put(out, SG_SA_SOA_NY, s->ny, r), put(out, SG_SA_SOA_NZ, s->nz, r);
+    put(out, SG_SA_SOA_R, s->r, r), put(out, SG_SA_SOA_INV_R, s->inv_r, r), put(out, SG_SA_SOA_ID, s->id, r);
+    if (s->key)
+        put(out, SG_SA_SOA_KEY, s->key, r);
 }
 
 /* ---- load: checks (invariant 3) ------------------------------------------ */
@@ -328,6 +337,24 @@ static sg_status check_kdtree(const sg_kdtree *t, size_t splats, const char *lab
         if (t->refs[k] >= splats)
             return sg_error_set(err, SG_ERR_CORRUPT, "%s: kd-tree reference %zu: splat %" PRIu32 " of %zu", label, k,
                                 t->refs[k], splats);
+    return SG_OK;
+}
+
+/* The per-leaf arrays are the gather of the point set by the references
+ * (pack_leaves in scene.c), bit for bit. */
+static sg_status check_soa(const sg_scene *sc, const char *label, sg_error *err)
+{
+    const sg_splat_soa *s = &sc->soa;
+    const sg_pointset *p = &sc->points;
+    for (size_t k = 0; k < sc->tree.ref_count; ++k) {
+        uint32_t i = sc->tree.refs[k];
+        if (s->id[k] != i || !same_bits(s->px[k], p->px[i]) || !same_bits(s->py[k], p->py[i]) ||
+            !same_bits(s->pz[k], p->pz[i]) || !same_bits(s->nx[k], p->nx[i]) || !same_bits(s->ny[k], p->ny[i]) ||
+            !same_bits(s->nz[k], p->nz[i]) || !same_bits(s->r[k], p->radius[i]) ||
+            !same_bits(s->inv_r[k], 1.0f / p->radius[i]))
+            return sg_error_set(err, SG_ERR_CORRUPT,
+                                "%s: splat reference %zu: its leaf copy differs from splat %" PRIu32, label, k, i);
+    }
     return SG_OK;
 }
 
@@ -477,6 +504,9 @@ sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_sc
     t->leaf_bounds = (sg_aabb *)in->data[SG_SA_KD_LEAF_BOUNDS];
     if ((st = check_kdtree(t, n, label, err)) != SG_OK)
         goto fail;
+    for (int a = SG_SA_SOA_PX; a <= SG_SA_SOA_ID; ++a)
+        if ((st = need(in, (sg_scene_array_id)a, t->ref_count, label, err)) != SG_OK)
+            goto fail;
     int keyed = sc->desc.model == SG_SURFACE_MLS;
     if (keyed && (st = need(in, SG_SA_SOA_KEY, t->ref_count, label, err)) != SG_OK)
         goto fail;
@@ -484,11 +514,15 @@ sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_sc
         st = sg_error_set(err, SG_ERR_CORRUPT, "%s: layer keys on a disk surface", label);
         goto fail;
     }
-    /* the per-leaf copies, gathered as the build gathers them (the same
-     * bits); only the key is the file's */
-    if ((st = sg_scene__pack_leaves(sc, err)) != SG_OK)
+    sg_splat_soa *s = &sc->soa;
+    s->px = (float *)in->data[SG_SA_SOA_PX], s->py = (float *)in->data[SG_SA_SOA_PY];
+    s->pz = (float *)in->data[SG_SA_SOA_PZ], s->nx = (float *)in->data[SG_SA_SOA_NX];
+    s->ny = (float *)in->data[SG_SA_SOA_NY], s->nz = (float *)in->data[SG_SA_SOA_NZ];
+    s->r = (float *)in->data[SG_SA_SOA_R], s->inv_r = (float *)in->data[SG_SA_SOA_INV_R];
+    s->id = (uint32_t *)in->data[SG_SA_SOA_ID];
+    s->key = keyed ? (uint32_t *)in->data[SG_SA_SOA_KEY] : NULL;
+    if ((st = check_soa(sc, label, err)) != SG_OK)
         goto fail;
-    sc->soa.key = keyed ? (uint32_t *)in->data[SG_SA_SOA_KEY] : NULL;
     /* as sg_scene_create sets it */
     sc->mls = (sg_mls_params){.kernel = sc->desc.kernel, .samples = sc->desc.samples_per_cell,
                               .max_spacing = sc->desc.max_sample_spacing};

@@ -2,19 +2,14 @@
  * (render/world_file.h).
  *
  * What it does: sg_scene_store_of lists what sg_scene_create computed — the
- * point set, the kd-tree and the MLS layer keys (MLS, disks), or the
+ * point set, the kd-tree and its per-leaf splat arrays (MLS, disks), or the
  * implicit surface octree (ISO) — as named arrays plus a block of scalars
  * (the desc with its defaults, counts, build facts). sg_scene_from_store
  * puts a scene together again over such arrays WITHOUT copying them: the
  * scene borrows them (a read-only map of the world file), so a loaded scene
  * holds the very bytes the built one held and answers every query with the
- * same bits. Two derived sets of arrays are recomputed, not stored: the
- * per-leaf copies of the splats (sg_splat_soa but its key: a gather of the
- * point set by the kd-tree's references, 8 references per splat on the
- * dragon, so storing them would make the file three times larger and its
- * load slower, CRCs costing more than the gather) and the ISO's light
- * sites (a pass over the leaves); both are deterministic, so the same
- * bytes as the build's.
+ * same bits. Only the ISO's light sites are recomputed (a pass over the
+ * leaves, sg_iso_sites_create, deterministic), not stored.
  * The build's wall time is stored as 0 (a loaded scene's info says 0 s):
  * it is the one value two builds of a scene differ in, so the store, and
  * the world file, are a function of the scene.
@@ -28,8 +23,9 @@
  * finite colours), every kd-tree node (children after their parent, each
  * reached once, depth within SG_SCENE_MAX_KD_DEPTH, leaf numbers in range,
  * split planes not NaN), leaf_first (from 0, non-decreasing, ending at the
- * reference count), every reference (< splat count), leaf boxes without
- * NaN, and
+ * reference count), every reference (< splat count), that the per-leaf
+ * splat arrays are exactly the gather of the point set by the references
+ * (bit for bit, so they hold no NaN either), leaf boxes without NaN, and
  * for the ISO every node (masks consistent, children after their parent,
  * each reached once, within max_depth, ranges inside the arrays) and leaf
  * (corners and splat in range) and its scalars (finite, unit = edge /
@@ -48,14 +44,15 @@
 #include "core/error.h"
 #include "surface/scene.h"
 
-/* Every array a scene may hold; which ones a surface uses: MLS the point
- * set, KD_* and SOA_KEY; DISK the same without SOA_KEY; ISO the point set
- * and ISO_*. */
+/* Every array a scene may hold; which ones a surface uses: MLS all of
+ * POINTS..SOA_KEY but the ISO's, DISK the same without SOA_KEY, ISO the
+ * point set and ISO_*. */
 typedef enum sg_scene_array_id {
     SG_SA_PX, SG_SA_PY, SG_SA_PZ, SG_SA_NX, SG_SA_NY, SG_SA_NZ, SG_SA_RADIUS, SG_SA_AR, SG_SA_AG,
     SG_SA_AB,                                                         /* point set, count = splats  */
     SG_SA_KD_NODES, SG_SA_KD_LEAF_FIRST, SG_SA_KD_REFS, SG_SA_KD_LEAF_BOUNDS, /* sg_kdtree          */
-    SG_SA_SOA_KEY,                                   /* MLS layer keys (sg_splat_soa), count = refs */
+    SG_SA_SOA_PX, SG_SA_SOA_PY, SG_SA_SOA_PZ, SG_SA_SOA_NX, SG_SA_SOA_NY, SG_SA_SOA_NZ, SG_SA_SOA_R,
+    SG_SA_SOA_INV_R, SG_SA_SOA_ID, SG_SA_SOA_KEY,                     /* sg_splat_soa, count = refs */
     SG_SA_ISO_NODES, SG_SA_ISO_LEAVES, SG_SA_ISO_CF, SG_SA_ISO_CN,   /* the octree (iso_int.h)     */
     SG_SA_COUNT
 } sg_scene_array_id;
