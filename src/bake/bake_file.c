@@ -34,6 +34,9 @@
  *     Nothing is allocated from a file value before it was bounded: the
  *     table is at most SG_BAKE_MAX_SECTIONS entries and must fit in the file;
  *     payload sizes must fit in the file before the caller sees them.
+ *  6. Reader with a map (open_desc .map): f->map holds the whole file from
+ *     open to close, so views (sg_bake_file_view) stay valid that long;
+ *     each view checks its payload's CRC before handing it out.
  */
 #include "bake/bake_file.h"
 
@@ -972,6 +975,19 @@ sg_status sg_bake_file_view(const sg_bake_file *f, const char *tag, const void *
                             f->path, s->tag, s->crc, crc);
     *data = f->map + s->offset;
     return SG_OK;
+}
+
+int sg_bake_file_has_magic(const char *path, sg_bake_kind kind)
+{
+    if (!path || !kind_ok(kind))
+        return 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    uint8_t h[8];
+    int64_t got = pread_all(fd, h, sizeof h, 0);
+    close(fd);
+    return got == (int64_t)sizeof h && memcmp(h, MAGIC[kind], sizeof h) == 0;
 }
 
 void sg_bake_file_close(sg_bake_file *f)

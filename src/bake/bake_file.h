@@ -288,6 +288,11 @@ sg_status sg_bake_file_read(const sg_bake_file *f, const char *tag, void *dst, u
  * that the file still has its size. *data only on SG_OK. */
 sg_status sg_bake_file_view(const sg_bake_file *f, const char *tag, const void **data, sg_error *err);
 
+/* 1 if the file at path begins with the magic of kind (a file of that
+ * kind, maybe damaged past its first 8 bytes); 0 if it does not, cannot
+ * be read, or is missing. Reads 8 bytes, checks nothing else. */
+int sg_bake_file_has_magic(const char *path, sg_bake_kind kind);
+
 /* Closes the file (and unmaps it); NULL is a no-op. */
 void sg_bake_file_close(sg_bake_file *f);
 

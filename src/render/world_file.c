@@ -373,14 +373,10 @@ fail:
 
 sg_status sg_world_file_replaceable(const char *path, sg_error *err)
 {
-    static const char magic[8] = {'S', 'G', 'W', 'R', 'L', 'D', 0, '\n'}; /* bake_file.h */
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    struct stat sb;
+    if (stat(path, &sb) != 0)
         return errno == ENOENT ? SG_OK : sg_error_set(err, SG_ERR_IO, "%s: %s", path, strerror(errno));
-    char head[8] = {0};
-    size_t got = fread(head, 1, sizeof head, f);
-    fclose(f);
-    if (got == sizeof head && memcmp(head, magic, sizeof head) == 0)
+    if (sg_bake_file_has_magic(path, SG_BAKE_KIND_WORLD))
         return SG_OK;
     return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: not a world file; it is left alone (give another path)", path);
 }
