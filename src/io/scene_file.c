@@ -457,10 +457,12 @@ static sg_status parse_material(const ctx *c, const cJSON *obj, const char *jp, 
 static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, sg_scene_desc *d)
 {
     static const char *const keys[] = {"model", "kernel", "samples_per_cell", "refinements", "iso_tolerance",
-                                       "iso_max_depth"};
+                                       "iso_max_depth", "iso_leaf_radii", "iso_lod"};
     static const char *const models[] = {"mls", "disk", "iso"};
     static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK, SG_SURFACE_ISO};
     static const range TOLERANCE = {0.0, 10.0, 1, 0};
+    static const range LOD_PIXELS = {0.0, 64.0, 0, 0};
+    static const range LEAF_RADII = {0.0, 16.0, 1, 0};
     static const char *const kernels[] = {"hat", "gaussian"};
     static const int kernel_values[] = {SG_KERNEL_HAT, SG_KERNEL_GAUSSIAN};
     static const char *const refs[] = {"shrink", "encourage", "collapse"};
@@ -479,6 +481,13 @@ static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, s
         st = get_float(c, obj, jp, "iso_tolerance", TOLERANCE, &d->iso_tolerance);
     if (st == SG_OK)
         st = get_int(c, obj, jp, "iso_max_depth", 2, 20, &d->iso_max_depth);
+    if (st == SG_OK)
+        st = get_float(c, obj, jp, "iso_leaf_radii", LEAF_RADII, &d->iso_leaf_radii);
+    if (st == SG_OK && member(obj, "iso_lod")) { /* 0 in the file: off */
+        float lod = 0.0f;
+        st = get_float(c, obj, jp, "iso_lod", LOD_PIXELS, &lod);
+        d->iso_lod = lod > 0.0f ? lod : -1.0f;
+    }
     const cJSON *r = member(obj, "refinements");
     if (st == SG_OK && r) {
         char rp[JP_MAX];
@@ -990,6 +999,8 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
             if (m->surface.model == SG_SURFACE_ISO) { /* MLS and disk scenes keep their hashes */
                 h_f32(&h, m->surface.iso_tolerance);
                 h_u64(&h, (uint64_t)(int64_t)m->surface.iso_max_depth);
+                if (m->surface.iso_leaf_radii != 0.0f) /* earlier ISO bakes keep their hashes */
+                    h_f32(&h, m->surface.iso_leaf_radii);
             }
         }
     }

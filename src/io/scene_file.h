@@ -58,6 +58,9 @@
  *           "samples_per_cell": 8,      [1, 1024]
  *           "iso_tolerance": 0.05,      (0, 10] smallest radii (iso.h)
  *           "iso_max_depth": 16,        [2, 20]
+ *           "iso_leaf_radii": 2,        (0, 16] largest leaf, smallest radii
+ *           "iso_lod": 1,               [0, 64] pixels, 0 = off; not hashed
+ *                                       (camera rays only: a bake stays valid)
  *           "refinements": {"shrink": true, "encourage": true, "collapse": true}
  *         }
  *       } ],

@@ -87,6 +87,10 @@ static cJSON *model_json(const sg_scene_model *m)
         cJSON_AddItemToObject(sur, "iso_tolerance", num(m->surface.iso_tolerance));
     if (m->surface.iso_max_depth > 0)
         cJSON_AddNumberToObject(sur, "iso_max_depth", m->surface.iso_max_depth);
+    if (m->surface.iso_leaf_radii > 0.0f)
+        cJSON_AddItemToObject(sur, "iso_leaf_radii", num(m->surface.iso_leaf_radii));
+    if (m->surface.iso_lod != 0.0f)
+        cJSON_AddItemToObject(sur, "iso_lod", num(m->surface.iso_lod > 0.0f ? m->surface.iso_lod : 0.0f));
     cJSON *r = cJSON_AddObjectToObject(sur, "refinements");
     cJSON_AddBoolToObject(r, "shrink", !(m->surface.kd_disable & SG_KD_NO_SHRINK));
     cJSON_AddBoolToObject(r, "encourage", !(m->surface.kd_disable & SG_KD_NO_ENCOURAGE));

@@ -31,6 +31,7 @@
 #include "surface/iso.h"
 
 #include <assert.h>
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -68,6 +69,12 @@ void sg_iso_destroy(sg_iso *iso)
     sg_free(iso->cf);
     sg_free(iso->cn);
     sg_free(iso);
+}
+
+void sg_iso_set_lod(sg_iso *iso, float lod_px)
+{
+    assert(iso && lod_px >= 0.0f && isfinite(lod_px));
+    iso->lod_px = lod_px;
 }
 
 void sg_iso_get_info(const sg_iso *iso, sg_iso_info *info)
@@ -282,22 +289,34 @@ static int critical_points(const cubic *c, float out[2])
     return m;
 }
 
-/* Accepts or rejects a crossing at σ of the leaf; fills hit on accept. */
-static int accept(const sg_iso *iso, const iso_leaf *L, ray_state *rs, float t, sg_vec3 uvw, int entry, uint32_t leaf,
-                  sg_hit *hit)
+/* The patch a ray meets in a cell: the trilinear interpolation of v[8] at
+ * the corners of the cell's box (corner c at bit 0: +x, 1: +y, 2: +z). */
+typedef struct patch {
+    float v[8];
+    float k[8];        /* v in the monomial basis (patch_coeffs): k[0] = v[0] */
+    const iso_leaf *L; /* a leaf: its corner normals are interpolated; NULL: */
+    sg_vec3 n;         /* a coarse patch (iso_lod.c), of this normal          */
+    uint32_t leaf;     /* the leaf a hit names (a coarse patch: its leaf)     */
+} patch;
+
+/* Accepts or rejects a crossing at t (local coordinates uvw) of patch P;
+ * fills hit on accept. */
+static int accept(const sg_iso *iso, const patch *P, ray_state *rs, float t, sg_vec3 uvw, int entry, sg_hit *hit)
 {
     const sg_ray *ray = rs->ray;
     if (entry ? !rs->want_front : (!rs->want_back || (rs->either && rs->outside)))
         return 0;
     if (!(t >= ray->tmin && t <= ray->tmax))
         return 0;
-    /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
-    sg_vec3 n = sg_v3(0, 0, 0);
-    for (int k = 0; k < 8; ++k) {
-        float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
-        n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[L->corner[k]]), w);
+    sg_vec3 n = P->n;
+    if (P->L) { /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
+        n = sg_v3(0, 0, 0);
+        for (int k = 0; k < 8; ++k) {
+            float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
+            n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[P->L->corner[k]]), w);
+        }
+        n = sg_v3_normalize(n);
     }
-    n = sg_v3_normalize(n);
     float side = entry ? -1.0f : 1.0f;
     float dn = sg_v3_dot(ray->dir, n);
     if (!(dn * side > SIDE_COS)) /* invariant 2 */
@@ -307,22 +326,30 @@ static int accept(const sg_iso *iso, const iso_leaf *L, ray_state *rs, float t, 
     hit->t = t;
     hit->p = sg_v3_madd(ray->org, ray->dir, t);
     hit->n = n;
-    hit->splat = L->splat;
-    hit->leaf = leaf;
+    hit->splat = iso->leaves[P->leaf].splat;
+    hit->leaf = P->leaf;
     return 1;
 }
 
-/* The first accepted crossing in leaf `leaf` (box b) over [t0, t1]. */
-static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+/* The patch as k0 + k1 u + k2 w + k3 z + k4 u w + k5 w z + k6 u z + k7 u w z
+ * over local coordinates (u, w, z) in [0,1]^3; once per patch, whatever
+ * number of rays meets it. */
+static void patch_coeffs(patch *P)
 {
-    const iso_leaf *L = &iso->leaves[leaf];
+    const float *v = P->v;
+    P->k[0] = v[0];
+    P->k[1] = v[1] - v[0], P->k[2] = v[2] - v[0], P->k[3] = v[4] - v[0];
+    P->k[4] = v[3] - v[1] - v[2] + v[0], P->k[5] = v[6] - v[2] - v[4] + v[0], P->k[6] = v[5] - v[1] - v[4] + v[0];
+    P->k[7] = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
+}
+
+/* The first accepted crossing of patch P (box b, coefficients set) over
+ * [t0, t1]. */
+static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
     const sg_ray *ray = rs->ray;
-    float v[8];
-    for (int k = 0; k < 8; ++k)
-        v[k] = (float)iso->cf[L->corner[k]] * iso->f_scale;
-    float k1 = v[1] - v[0], k2 = v[2] - v[0], k3 = v[4] - v[0];
-    float k4 = v[3] - v[1] - v[2] + v[0], k5 = v[6] - v[2] - v[4] + v[0], k6 = v[5] - v[1] - v[4] + v[0];
-    float k7 = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
+    const float *v = P->v;
+    float k1 = P->k[1], k2 = P->k[2], k3 = P->k[3], k4 = P->k[4], k5 = P->k[5], k6 = P->k[6], k7 = P->k[7];
     sg_vec3 h = sg_v3_sub(b.hi, b.lo);
     float S = t1 - t0;
     sg_vec3 e = sg_v3_madd(ray->org, ray->dir, t0);
@@ -341,7 +368,7 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
         int was_pos = rs->carry_g > 0.0f, is_pos = c.a0 > 0.0f;
         if (was_pos != is_pos) {
             rs->roots++;
-            if (accept(iso, L, rs, t0, sg_v3(u, w, z), was_pos, leaf, hit))
+            if (accept(iso, P, rs, t0, sg_v3(u, w, z), was_pos, hit))
                 return 1;
         }
     }
@@ -362,7 +389,7 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
             float s = solve_piece(&c, pa, pb, ga, gb, entry);
             float t = t0 + s * S;
             sg_vec3 q = sg_v3(u + bu * s, w + bw * s, z + bz * s);
-            if (accept(iso, L, rs, t, q, entry, leaf, hit))
+            if (accept(iso, P, rs, t, q, entry, hit))
                 return 1;
         }
         if (rs->either && gb > 0.0f)
@@ -376,6 +403,79 @@ static int leaf_hit(const sg_iso *iso, uint32_t leaf, sg_aabb b, float t0, float
     rs->carry = !crossed;
     rs->carry_t = t1;
     rs->carry_g = ga;
+    return 0;
+}
+
+/* Leaf `leaf`'s patch. */
+static void leaf_patch(const sg_iso *iso, uint32_t leaf, patch *P)
+{
+    P->L = &iso->leaves[leaf];
+    P->leaf = leaf;
+    for (int k = 0; k < 8; ++k)
+        P->v[k] = (float)iso->cf[P->L->corner[k]] * iso->f_scale;
+    patch_coeffs(P);
+}
+
+/* Whether ray state rs may skip node `node` (cell interval [t0, t1],
+ * normal n decoded from D) without meeting any leaf of it: its path
+ * through the cell stays off the slab holding every leaf below
+ * (iso_int.h), by more than the float rounding of n . x (a few ulps of
+ * |n . o| + t1). Positive cells there would tell a ray accepting either
+ * face that it is outside (iso_int.h pos_mask); one that does not know it
+ * yet skips only a node whose leaves form one sheet (their normals agree:
+ * a coarse patch exists) that it passes on the side its normal faces —
+ * outside, so it now knows — and otherwise descends. */
+static inline int slab_skips(const iso_lod *D, sg_vec3 n, ray_state *rs, float t0, float t1)
+{
+    const sg_ray *ray = rs->ray;
+    float s0 = sg_v3_dot(n, ray->org), sd = sg_v3_dot(n, ray->dir);
+    float a = s0 + sd * t0, b = s0 + sd * t1;
+    float m = 8.0f * FLT_EPSILON * (fabsf(n.x * ray->org.x) + fabsf(n.y * ray->org.y) + fabsf(n.z * ray->org.z) + t1);
+    int above = min2(a, b) > D->s_hi + m, below = max2(a, b) < D->s_lo - m;
+    if (!above && !below)
+        return 0;
+    if (!rs->either || rs->outside)
+        return 1;
+    if (above && D->leaf != ISO_NO_LOD) {
+        rs->outside = 1;
+        rs->carry = 0;
+        return 1;
+    }
+    return 0;
+}
+
+/* Whether a ray whose footprint is lod_w wide per unit distance takes the
+ * cell of `size` grid units that it enters at t0 as its node's coarse
+ * patch (iso.h, "Levels of detail"). */
+static inline int lod_takes(const sg_iso *iso, uint32_t node, uint32_t size, float lod_w, float t0)
+{
+    return lod_w > 0.0f && iso->nodes[node].lod.leaf != ISO_NO_LOD && (float)size * iso->unit <= lod_w * t0;
+}
+
+/* The first accepted crossing of node `node`'s coarse patch (box b) over
+ * [t0, t1]. Without one, the ray's state is left as it was (the ray then
+ * descends into the node as if it had not looked: no hole, no spurious
+ * jump at the next face); only its counters keep the work done. */
+static int lod_hit(const sg_iso *iso, uint32_t node, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    const iso_lod *D = &iso->nodes[node].lod;
+    patch P;
+    P.L = NULL;
+    sg_vec3 qn = iso_lod_normal(D);
+    P.n = sg_v3_normalize(qn);
+    P.leaf = D->leaf;
+    for (int k = 0; k < 8; ++k) {
+        sg_vec3 c = sg_v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
+        P.v[k] = sg_v3_dot(qn, c) - D->d;
+    }
+    patch_coeffs(&P);
+    ray_state before = *rs;
+    if (patch_hit(iso, &P, b, t0, t1, rs, hit))
+        return 1;
+    uint64_t isects = rs->isects, roots = rs->roots;
+    *rs = before;
+    rs->isects = isects;
+    rs->roots = roots;
     return 0;
 }
 
@@ -556,7 +656,7 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
     uint64_t nodes = 0, leaves = 0;
     int found = 0;
     ray_geom g;
-    float t0, t1;
+    float t0, t1, lod_w = iso->lod_px * ray->spread;
     if (!iso->node_count || !ray_enter(iso, ray, &g, &t0, &t1))
         goto out;
     stack_entry st[STACK_MAX];
@@ -573,11 +673,21 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
         }
         if (e.is_leaf) {
             leaves++;
-            if (leaf_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
+            patch P;
+            leaf_patch(iso, e.index, &P);
+            if (patch_hit(iso, &P, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
                 found = 1;
                 break;
             }
             continue;
+        }
+        const iso_lod *D = &iso->nodes[e.index].lod;
+        if (slab_skips(D, iso_lod_normal(D), &rs, e.t0, e.t1))
+            continue;
+        if (lod_takes(iso, e.index, size, lod_w, e.t0) &&
+            lod_hit(iso, e.index, cell_box(iso, e.x, e.y, e.z, size), e.t0, e.t1, &rs, hit)) {
+            found = 1;
+            break;
         }
         const iso_node *N = &iso->nodes[e.index];
         uint32_t base[3] = {e.x, e.y, e.z};
@@ -610,86 +720,170 @@ out:
  * state, so it meets the same leaves in the same order with the same
  * intervals as alone and gets the same hit, bit for bit; a cell is
  * visited while any ray still looking for a hit crosses it. */
+#ifdef __AVX2__
+/* The rays are the four lanes of SSE vectors. Every interval is the
+ * single-ray expression lane by lane: half_intervals' min2(a, b) is
+ * _mm_min_ps(b, a) and max2(a, b) is _mm_max_ps(b, a) (both return their
+ * second operand unless the first is strictly smaller / larger), and the
+ * children's clipping is children_crossed's AVX expression with the
+ * operands in its order. */
 typedef struct packet_entry {
+    __m128 t0, t1;
     uint32_t index, x, y, z;
-    float t0[4], t1[4];
     uint8_t level, kind, active; /* kind: CELL_*; active: rays crossing it */
 } packet_entry;
+
+/* The per-axis constants of four rays, lane r = rays[r]. */
+typedef struct packet_geom {
+    __m128 od[3], inv[3];
+    __m128 par[3];  /* all ones where ray r is parallel to axis a's planes */
+    int any_par[3];
+} packet_geom;
+
+/* half_intervals for the four lanes at once. */
+static inline void packet_half_intervals(const packet_geom *pg, const float p[3][3], __m128 ilo[3][2], __m128 ihi[3][2])
+{
+    const __m128 pinf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+    for (int a = 0; a < 3; ++a) {
+        __m128 o = pg->od[a], inv = pg->inv[a];
+        __m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][0]), o), inv);
+        __m128 pm = _mm_set1_ps(p[a][1]);
+        __m128 tm = _mm_mul_ps(_mm_sub_ps(pm, o), inv);
+        __m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][2]), o), inv);
+        ilo[a][0] = _mm_min_ps(tm, ta);
+        ihi[a][0] = _mm_max_ps(tm, ta);
+        ilo[a][1] = _mm_min_ps(tb, tm);
+        ihi[a][1] = _mm_max_ps(tb, tm);
+        if (pg->any_par[a]) {
+            __m128 below = _mm_cmple_ps(o, pm), above = _mm_cmpge_ps(o, pm), par = pg->par[a];
+            ilo[a][0] = _mm_blendv_ps(ilo[a][0], _mm_blendv_ps(pinf, ninf, below), par);
+            ihi[a][0] = _mm_blendv_ps(ihi[a][0], _mm_blendv_ps(ninf, pinf, below), par);
+            ilo[a][1] = _mm_blendv_ps(ilo[a][1], _mm_blendv_ps(pinf, ninf, above), par);
+            ihi[a][1] = _mm_blendv_ps(ihi[a][1], _mm_blendv_ps(ninf, pinf, above), par);
+        }
+    }
+}
 
 static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
 {
     ray_state rs[4];
     ray_geom g[4];
     float r0[4] = {0}, r1[4] = {0};
-    unsigned active = 0, found = 0;
+    unsigned active = 0, found = 0, either = 0;
     uint64_t nodes[4] = {0}, leaves[4] = {0};
+    float lod_w[4] = {0};
+    int lod_any = 0;
     for (int r = 0; r < 4; ++r) {
         if (!(mask >> r & 1u))
             continue;
         ray_state_init(&rs[r], &rays[r]);
+        lod_w[r] = iso->lod_px * rays[r].spread;
+        lod_any |= lod_w[r] > 0.0f;
+        if (rs[r].either)
+            either |= 1u << r;
         if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
             active |= 1u << r;
+    }
+    packet_geom pg;
+    for (int a = 0; a < 3; ++a) {
+        float od[4] = {0}, inv[4] = {0}, par[4] = {0};
+        for (int r = 0; r < 4; ++r) {
+            if (!(active >> r & 1u))
+                continue;
+            od[r] = g[r].od[a];
+            inv[r] = g[r].inv[a];
+            par[r] = g[r].par[a] ? -1.0f : 0.0f; /* the sign bit is blendv's mask */
+        }
+        pg.od[a] = _mm_loadu_ps(od);
+        pg.inv[a] = _mm_loadu_ps(inv);
+        pg.par[a] = _mm_loadu_ps(par);
+        pg.any_par[a] = _mm_movemask_ps(pg.par[a]) != 0;
     }
     unsigned octant = active ? g[__builtin_ctz(active)].octant : 0u;
     packet_entry st[STACK_MAX];
     int sp = 0;
     if (active)
-        st[sp++] = (packet_entry){0, 0, 0, 0, {r0[0], r0[1], r0[2], r0[3]}, {r1[0], r1[1], r1[2], r1[3]}, 0,
-                                  CELL_NODE, (uint8_t)active};
+        st[sp++] = (packet_entry){_mm_loadu_ps(r0), _mm_loadu_ps(r1), 0, 0, 0, 0, 0, CELL_NODE, (uint8_t)active};
     while (sp > 0) {
-        packet_entry e = st[--sp];
-        unsigned act = e.active & ~found;
+        const packet_entry *e = &st[--sp];
+        unsigned act = e->active & ~found;
         if (!act)
             continue;
-        uint32_t size = 1u << (iso->max_depth - e.level);
         for (unsigned m = act; m; m &= m - 1)
             nodes[__builtin_ctz(m)]++;
-        if (e.kind == CELL_POSITIVE) {
+        if (e->kind == CELL_POSITIVE) {
             for (unsigned m = act; m; m &= m - 1) {
                 rs[__builtin_ctz(m)].outside = 1;
                 rs[__builtin_ctz(m)].carry = 0;
             }
             continue;
         }
-        if (e.kind == CELL_LEAF) {
-            sg_aabb box = cell_box(iso, e.x, e.y, e.z, size);
+        uint32_t size = 1u << (iso->max_depth - e->level);
+        if (e->kind == CELL_LEAF) {
+            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+            float t0[4], t1[4];
+            _mm_storeu_ps(t0, e->t0);
+            _mm_storeu_ps(t1, e->t1);
+            patch P; /* once for the rays meeting it */
+            leaf_patch(iso, e->index, &P);
             for (unsigned m = act; m; m &= m - 1) {
                 int r = __builtin_ctz(m);
                 leaves[r]++;
-                if (leaf_hit(iso, e.index, box, e.t0[r], e.t1[r], &rs[r], &hits[r]))
+                if (patch_hit(iso, &P, box, t0[r], t1[r], &rs[r], &hits[r]))
                     found |= 1u << r;
             }
             continue;
         }
-        const iso_node *N = &iso->nodes[e.index];
-        uint32_t base[3] = {e.x, e.y, e.z};
-        float p[3][3];
-        cell_planes(iso, base, size, p);
-        float c0s[4][8], c1s[4][8];
-        unsigned visit[4] = {0}, any = 0;
+        const iso_lod *D = &iso->nodes[e->index].lod;
+        float t0[4], t1[4];
+        _mm_storeu_ps(t0, e->t0);
+        _mm_storeu_ps(t1, e->t1);
+        sg_vec3 dn = iso_lod_normal(D);
         for (unsigned m = act; m; m &= m - 1) {
             int r = __builtin_ctz(m);
-            float ilo[3][2], ihi[3][2];
-            half_intervals(&g[r], p, ilo, ihi);
-            visit[r] = (N->child_mask | (rs[r].either ? N->pos_mask : 0u)) &
-                       children_crossed(ilo, ihi, e.t0[r], e.t1[r], c0s[r], c1s[r]);
-            any |= visit[r];
+            if (slab_skips(D, dn, &rs[r], t0[r], t1[r]))
+                act &= ~(1u << r);
         }
-        for (unsigned m = xor_permute(any, octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
-            unsigned k = (31u - (unsigned)__builtin_clz(m)) ^ octant;
-            stack_entry ce = child_entry(N, base, size, e.level, k);
-            packet_entry pe = {ce.index, ce.x, ce.y, ce.z, {0}, {0}, ce.level, ce.is_leaf, 0};
-            for (unsigned q = act; q; q &= q - 1) {
-                int r = __builtin_ctz(q);
-                if (!(visit[r] >> k & 1u))
-                    continue;
-                /* a positive cell only for the rays that visit those */
-                pe.active |= (uint8_t)(1u << r);
-                pe.t0[r] = c0s[r][k];
-                pe.t1[r] = c1s[r][k];
+        if (!act)
+            continue;
+        if (lod_any && D->leaf != ISO_NO_LOD) {
+            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+            for (unsigned m = act; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                if (lod_takes(iso, e->index, size, lod_w[r], t0[r]) &&
+                    lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                    found |= 1u << r;
             }
+            act &= ~found;
+            if (!act)
+                continue;
+        }
+        const iso_node *N = &iso->nodes[e->index];
+        uint32_t base[3] = {e->x, e->y, e->z};
+        uint8_t level = e->level;
+        __m128 T0 = e->t0, T1 = e->t1;
+        float p[3][3];
+        cell_planes(iso, base, size, p);
+        __m128 ilo[3][2], ihi[3][2];
+        packet_half_intervals(&pg, p, ilo, ihi);
+        /* positive cells matter only to rays accepting either face */
+        unsigned pos_rays = act & either;
+        /* children front to back is j = 0..7 with k = j ^ octant: push the
+         * farthest first; e (a stack slot) is overwritten from here on */
+        for (int j = 7; j >= 0; --j) {
+            unsigned k = (unsigned)j ^ octant;
+            unsigned exists = N->child_mask >> k & 1u, pos = N->pos_mask >> k & 1u;
+            unsigned lanes = exists ? act : pos ? pos_rays : 0u;
+            if (!lanes)
+                continue;
+            __m128 c0 = _mm_max_ps(_mm_max_ps(T0, ilo[0][k & 1]), _mm_max_ps(ilo[1][k >> 1 & 1], ilo[2][k >> 2]));
+            __m128 c1 = _mm_min_ps(_mm_min_ps(T1, ihi[0][k & 1]), _mm_min_ps(ihi[1][k >> 1 & 1], ihi[2][k >> 2]));
+            lanes &= (unsigned)_mm_movemask_ps(_mm_cmple_ps(c0, c1));
+            if (!lanes)
+                continue;
+            stack_entry ce = child_entry(N, base, size, level, k);
             assert(sp < STACK_MAX);
-            st[sp++] = pe;
+            st[sp++] = (packet_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, ce.level, ce.is_leaf, (uint8_t)lanes};
         }
     }
     for (int r = 0; r < 4; ++r) {
@@ -701,6 +895,19 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     }
     return found;
 }
+#else
+/* The portable build traces each ray alone (the same hits). */
+static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
+{
+    unsigned found = 0;
+    for (unsigned m = mask; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (trace(iso, &rays[r], &hits[r], stats))
+            found |= 1u << r;
+    }
+    return found;
+}
+#endif
 
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats)

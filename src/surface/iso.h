@@ -47,11 +47,34 @@
  *    the ray is a cubic in t, split at its critical points into monotone
  *    pieces, and the first accepted sign change is solved by safeguarded
  *    Newton/bisection to |Δσ| <= SG_ISO_ROOT_EPS of the leaf's ray span.
+ *    Every inner node also bounds its leaves by a slab along their mean
+ *    normal (iso_lod.c); a ray whose path through the node's cell stays
+ *    off the slab skips the node (a grazing ray over a ground: half the
+ *    node steps), with the rule of iso.c slab_skips for rays accepting
+ *    either face.
+ *
+ *  - Levels of detail (iso_lod.c): every inner node also holds a coarse
+ *    patch, the plane fitted to the surface of its leaves (stored where
+ *    the leaves' normals agree and their surface lies within an eighth of
+ *    the node's edge of the plane). A ray with a footprint (sg_ray.spread,
+ *    set for camera rays) takes a node whose edge is at most lod pixels of
+ *    its footprint where the ray enters the cell as that plane, clipped to
+ *    the cell, instead of descending; if the plane gives no accepted
+ *    crossing in the cell the ray descends as if the node were large, so
+ *    level of detail never opens a hole. It can widen a silhouette by at
+ *    most one such cell (under lod pixels), and moves a hit by at most the
+ *    ray's path through the cell (sqrt(3) cell edges; tested). An LOD hit
+ *    reads light and material from the node's representative leaf (the
+ *    leaf nearest the plane's centre), with the leaf's trilinear weights
+ *    clamped to its box, and has the plane's normal. Rays without a
+ *    footprint (shadow rays, the bake's rays: spread 0) and lod = 0 always
+ *    reach the leaves, bit for bit as without coarse patches.
  *
  * What it does not do: the keyed layers of mls.c (the field per group of
  * splats facing the ray near thin walls and folds) — a wall thinner than a
  * leaf cancels or closes up; hit weights for interpolating splat data;
- * levels of detail; updates after the build.
+ * level of detail for secondary rays (they carry no footprint yet);
+ * updates after the build.
  *
  * Compact storage (bytes stated for the benchmark's report):
  *  - corner: f as int16, q = round(f / f_scale), f_scale = max |f| / 32767
@@ -63,7 +86,9 @@
  *  - leaf: 8 corner indices + the representative splat (uint32, the splat
  *    nearest the leaf centre): 36 bytes.
  *  - inner node: child mask, leaf-child mask, first inner child, first
- *    leaf child (children stored contiguously): 12 bytes.
+ *    leaf child (children stored contiguously): 12 bytes; its coarse
+ *    patch and slab (normal as 3 x int16, plane offset, slab bounds,
+ *    representative leaf): 24 bytes.
  *
  * Use:
  *     sg_iso_desc d = { .tolerance = 0.05f };     zero = defaults
@@ -106,6 +131,11 @@ typedef struct sg_iso sg_iso; /* opaque */
  * case (measured 4e-5); stated with margin. */
 #define SG_ISO_NORMAL_EPS 1e-4f
 
+/* Level-of-detail threshold, in pixels of a camera ray's footprint: a node
+ * whose cell edge is below this many footprints is hit as its coarse
+ * patch (Kashyap 2010 §4.6 stops at about one pixel). */
+#define SG_ISO_LOD_DEFAULT 1.0f
+
 typedef struct sg_iso_desc {
     sg_kernel kernel;   /* MLS weight (as sg_scene_desc); default SG_KERNEL_HAT */
     int max_depth;      /* deepest leaf level, 2..20; default 16                 */
@@ -120,6 +150,10 @@ typedef struct sg_iso_desc {
                            CPU 32 s instead of 67 s, tracing 5-10% faster;
                            rule c still refines where the patch misses f */
     int threads;        /* build threads; 0 = OpenMP default                    */
+    float lod;          /* level of detail for rays with a footprint, in pixels
+                           (see above); 0 = SG_ISO_LOD_DEFAULT, negative = off
+                           (every ray to the leaves); a query setting, not a
+                           property of the octree (sg_iso_set_lod)            */
 } sg_iso_desc;
 
 typedef struct sg_iso_info {
@@ -172,6 +206,10 @@ unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mas
 int sg_iso_occluded(const sg_iso *iso, const sg_ray *ray, sg_ray_stats *stats);
 
 void sg_iso_get_info(const sg_iso *iso, sg_iso_info *info);
+
+/* Changes the level-of-detail threshold (pixels, >= 0; 0: off) of a built
+ * ISO, e.g. for a speed-against-error sweep. Not while queries run on it. */
+void sg_iso_set_lod(sg_iso *iso, float lod_px);
 
 /* The box of every stored leaf, boxes[leaf] for leaf < leaf_count (the
  * caller's array), e.g. to relate a hit's error to its leaf's size. */

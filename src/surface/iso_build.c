@@ -622,9 +622,13 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     if (d.max_depth == 0) d.max_depth = 16;
     if (d.tolerance == 0.0f) d.tolerance = 0.05f;
     if (d.leaf_radii == 0.0f) d.leaf_radii = 2.0f; /* iso.h */
+    if (d.lod == 0.0f) d.lod = SG_ISO_LOD_DEFAULT;
+    else if (d.lod < 0.0f) d.lod = 0.0f; /* off */
     if (d.max_depth < 2 || d.max_depth > ISO_MAX_DEPTH)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: max_depth %d outside 2..%d", d.max_depth,
                             ISO_MAX_DEPTH);
+    if (!isfinite(d.lod))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: lod %g must be finite", (double)d.lod);
     if (!(d.tolerance > 0.0f) || !isfinite(d.tolerance) || !(d.leaf_radii > 0.0f) || !isfinite(d.leaf_radii))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_iso_create: tolerance %g and leaf_radii %g must be finite and > 0",
                             (double)d.tolerance, (double)d.leaf_radii);
@@ -692,6 +696,8 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     st = lay_out(iso, &T, root, err);
     if (st != SG_OK)
         goto fail;
+    iso_lod_build(iso);
+    iso->lod_px = d.lod;
     int depth = 0;
     for (size_t p = 0; p < T.np; ++p)
         depth = T.parts[p].depth > depth ? T.parts[p].depth : depth;
@@ -705,7 +711,8 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     in->node_count = iso->node_count;
     in->leaf_count = iso->leaf_count;
     in->corner_count = iso->corner_count;
-    in->memory_bytes = sizeof *iso + iso->node_count * sizeof(iso_node) + iso->leaf_count * sizeof(iso_leaf) +
+    in->memory_bytes = sizeof *iso + iso->node_count * sizeof(iso_node) +
+                       iso->leaf_count * sizeof(iso_leaf) +
                        iso->corner_count * (sizeof(int16_t) + sizeof(uint32_t));
     in->bytes_per_leaf = iso->leaf_count ? (double)in->memory_bytes / (double)iso->leaf_count : 0.0;
     in->bytes_per_point = (double)in->memory_bytes / (double)ps->count;

@@ -208,7 +208,7 @@ static sg_status create_iso(sg_scene *sc, sg_error *err)
 {
     const sg_scene_desc *d = &sc->desc;
     sg_iso_desc id = {.kernel = d->kernel, .max_depth = d->iso_max_depth, .tolerance = d->iso_tolerance,
-                      .threads = d->threads};
+                      .threads = d->threads, .lod = d->iso_lod, .leaf_radii = d->iso_leaf_radii};
     sg_status st = sg_iso_create(&id, &sc->points, &sc->iso, err);
     if (st == SG_OK)
         st = sg_iso_sites_create(sc->iso, &sc->points, &sc->iso_sites, err);

@@ -84,6 +84,10 @@ typedef struct sg_scene_desc {
     float iso_tolerance;       /* ISO: patch error allowed, in smallest radii;
                                   default 0.05 (iso.h)                         */
     int iso_max_depth;         /* ISO: deepest leaf level; default 16           */
+    float iso_leaf_radii;      /* ISO: largest leaf edge in smallest radii
+                                  (rule a, iso.h); default 2                   */
+    float iso_lod;             /* ISO: level-of-detail threshold of camera rays,
+                                  pixels; default 1; negative: off (iso.h)     */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */

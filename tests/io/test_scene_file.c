@@ -274,6 +274,10 @@ static const bad_case BAD[] = {
     {M0 "'surface': {'refinements': {'shrnk': false}}}]}",
      "scene.json: $.models[0].surface.refinements.shrnk: unknown key (expected one of: shrink, encourage, "
      "collapse)"},
+    {M0 "'surface': {'iso_leaf_radii': 0}}]}",
+     "scene.json: $.models[0].surface.iso_leaf_radii: expected a number in (0,16], got 0"},
+    {M0 "'surface': {'iso_lod': 65}}]}",
+     "scene.json: $.models[0].surface.iso_lod: expected a number in [0,64], got 65"},
     {M0 "'surface': {'samples_per_cell': 0}}]}",
      "scene.json: $.models[0].surface.samples_per_cell: expected an integer in [1,1024], got 0"},
     {"{'models': [{'builtin': 'dragon'}]}",
@@ -480,6 +484,37 @@ static void test_scene_file_hash(void **state)
     assert_true(hash_of(base, SG_SCENE_HASH_BAKE) != hash_of(base, SG_SCENE_HASH_ALL));
 }
 
+/* The ISO's leaf size and level-of-detail threshold. iso_lod: absent = the default (0 in the
+ * desc), 0 = off (negative in the desc), a value in pixels; it steers
+ * camera rays only, so a bake made before it changed stays valid (the
+ * bake key ignores it, where iso_tolerance, which moves the octree's
+ * corners and so the light sites, is part of it). */
+static void test_scene_file_iso_lod(void **state)
+{
+    (void)state;
+    const char *text[] = {"{'models': [{'path': 'a.ply', 'surface': {'model': 'iso'}}]}",
+                          "{'models': [{'path': 'a.ply', 'surface': {'model': 'iso', 'iso_lod': 0}}]}",
+                          "{'models': [{'path': 'a.ply', 'surface': {'model': 'iso', 'iso_lod': 2.5}}]}",
+                          "{'models': [{'path': 'a.ply', 'surface': {'model': 'iso', 'iso_tolerance': 0.1}}]}",
+                          "{'models': [{'path': 'a.ply', 'surface': {'model': 'iso', 'iso_leaf_radii': 1}}]}"};
+    const float want[] = {0.0f, -1.0f, 2.5f, 0.0f};
+    for (int i = 0; i < 3; ++i) {
+        sg_scene_file sf = parse_ok(json(text[i]));
+        if (sf.models[0].surface.iso_lod != want[i])
+            fail_msg("%s: iso_lod %g, want %g", text[i], (double)sf.models[0].surface.iso_lod, (double)want[i]);
+        sg_scene_file_free(&sf);
+    }
+    uint64_t h0 = hash_of(text[0], SG_SCENE_HASH_BAKE);
+    assert_true(hash_of(text[1], SG_SCENE_HASH_BAKE) == h0);
+    assert_true(hash_of(text[2], SG_SCENE_HASH_BAKE) == h0);
+    assert_true(hash_of(text[3], SG_SCENE_HASH_BAKE) != h0);
+    /* the leaf size moves the corners: part of the key */
+    sg_scene_file sf = parse_ok(json(text[4]));
+    assert_true(sf.models[0].surface.iso_leaf_radii == 1.0f);
+    sg_scene_file_free(&sf);
+    assert_true(hash_of(text[4], SG_SCENE_HASH_BAKE) != h0);
+}
+
 /* ---- 7 ---------------------------------------------------------------- */
 
 static void assert_near3(const char *what, sg_vec3 v, float x, float y, float z)
@@ -621,6 +656,7 @@ int main(void)
         cmocka_unit_test(test_scene_file_path_resolution), cmocka_unit_test(test_scene_file_hash),
         cmocka_unit_test(test_scene_file_transform),       cmocka_unit_test(test_scene_file_examples),
         cmocka_unit_test(test_scene_file_io_error),         cmocka_unit_test(test_scene_file_up_axis),
+        cmocka_unit_test(test_scene_file_iso_lod),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -152,6 +152,58 @@ static void test_iso_plane_exact(void **state)
     sg_pointset_free(&ps);
 }
 
+/* 2b. Grazing rays over a plane accepting either face, from above and
+ * from below (a ground seen from far off, a camera under it): every ray
+ * aimed at the plane's interior hits it, to test 2's tolerance. They run
+ * over many cells holding the plane without crossing it there, which the
+ * traversal skips by the slab of the leaves below each node (iso_int.h);
+ * a skip must never lose the crossing, and a ray from below (inside the
+ * field's negative side, no positive cell seen) must still take the back
+ * face. */
+static void test_iso_plane_grazing_either_face(void **state)
+{
+    (void)state;
+    sg_plane_points_desc pd = {.side = 200, .half = 2.0f, .centre = sg_v3(0, 0.25f, 0)};
+    sg_pointset ps = {0};
+    assert_int_equal(sg_points_make_plane(&pd, &ps, NULL), SG_OK);
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    float tol = 0.5f * info.f_scale + 1e-5f;
+    uint64_t rng = 11;
+    int misses[2] = {0, 0}, wrong_side = 0;
+    float worst = 0;
+    sg_ray_stats st = {0};
+    for (int i = 0; i < 4000; ++i) {
+        int from_below = i & 1;
+        float lim = 2.0f - 3.0f * r;
+        sg_vec3 target = sg_v3(lim * (2 * sg_test_rand01(&rng) - 1), 0.25f, lim * (2 * sg_test_rand01(&rng) - 1));
+        float elev = (3.0f + 17.0f * sg_test_rand01(&rng)) * PI / 180.0f, az = 2.0f * PI * sg_test_rand01(&rng);
+        sg_vec3 dir = sg_v3(cosf(elev) * cosf(az), from_below ? sinf(elev) : -sinf(elev), cosf(elev) * sinf(az));
+        sg_vec3 from = sg_v3_madd(target, dir, -3.0f);
+        sg_ray ray = make_ray(from, dir, SG_RAY_ANY_FACE);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, &st)) {
+            ++misses[from_below];
+            continue;
+        }
+        worst = fmaxf(worst, fabsf(hit.p.y - 0.25f));
+        /* from above the front face (n . dir < 0), from below the back
+         * face (the normal keeps the model's side: n . dir > 0) */
+        float nd = sg_v3_dot(hit.n, dir);
+        wrong_side += from_below ? !(nd > 0.0f) : !(nd < 0.0f);
+    }
+    printf("grazing: %.1f node steps per ray, misses above %d below %d, worst |y - y0| %g (tol %g)\n",
+           (double)st.nodes / (double)st.rays, misses[0], misses[1], (double)worst, (double)tol);
+    if (misses[0] || misses[1] || worst > tol || wrong_side)
+        fail_msg("grazing plane: misses from above %d, from below %d; worst |y - y0| %g (tol %g); %d hits on "
+                 "the wrong face",
+                 misses[0], misses[1], (double)worst, (double)tol, wrong_side);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
 /* Camera rays: a pinhole at `eye` looking at `look`, n x n pixels over a
  * 40-degree field. */
 static sg_ray camera_ray(sg_vec3 eye, sg_vec3 look, int n, int x, int y)
@@ -516,12 +568,14 @@ static void test_iso_face_flags(void **state)
  * front only, back only), quads that straddle the silhouette, a quad with
  * one ray of other direction signs, and masks with rays left out (their
  * hits must be left alone). */
-static void test_iso_intersect4_matches_single(void **state)
+static void intersect4_matches_single(float lod_px)
 {
-    (void)state;
     sg_pointset ps = {0};
     make_sphere(&ps, 20000);
     sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_set_lod(iso, lod_px);
+    /* camera rays carry their pixel's footprint (spread 0 below: none) */
+    float spread = lod_px > 0.0f ? 2.0f * tanf(20.0f * PI / 180.0f) / 64.0f : 0.0f;
     const sg_vec3 eyes[3] = {sg_v3(1.5f, 1.0f, 3.0f), sg_v3(0.1f, -0.2f, 0.05f), sg_v3(-2.5f, 0.3f, -1.0f)};
     const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
     const int n = 64;
@@ -534,6 +588,7 @@ static void test_iso_intersect4_matches_single(void **state)
                     for (int r = 0; r < 4; ++r) {
                         rays[r] = camera_ray(eyes[ei], sg_v3(0, 0, 0), n, x + (r & 1), y + (r >> 1));
                         rays[r].flags = flags[fi];
+                        rays[r].spread = spread;
                     }
                     if (((x + y) / 2) % 7 == 0) /* one ray of other direction signs */
                         rays[3].dir = sg_v3_scale(rays[3].dir, -1.0f);
@@ -564,8 +619,120 @@ static void test_iso_intersect4_matches_single(void **state)
                             fail_msg("a miss in four does not say so");
                     }
                 }
-    printf("intersect4: %d rays checked, %d hits\n", checked, hits);
+    printf("intersect4 (lod %g px): %d rays checked, %d hits\n", (double)lod_px, checked, hits);
     assert_true(hits > checked / 4);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+static void test_iso_intersect4_matches_single(void **state)
+{
+    (void)state;
+    intersect4_matches_single(0.0f);
+}
+
+/* The same with level of detail: 64 x 64 pixels and an 8-pixel threshold
+ * put cells of up to 8 footprints (0.09 at distance 1.6, the leaves are
+ * about 0.06) under coarse patches, so both paths take LOD decisions per
+ * ray and must take the same ones. */
+static void test_iso_intersect4_matches_single_lod(void **state)
+{
+    (void)state;
+    intersect4_matches_single(8.0f);
+}
+
+/* 8b. Level of detail (iso.h) against full detail on a sampled sphere seen
+ * small (radius 1 at distance 6: about 62 of 128 pixels across), so that
+ * cells below a few footprints hold much of the surface.
+ *  - threshold -> 0 is full detail, bit for bit;
+ *  - no holes: a pixel hit at full detail is hit at every threshold (a ray
+ *    whose coarse patch gives no crossing descends);
+ *  - depth: where the full-detail hit faces the ray (cos >= 0.5, away
+ *    from the silhouette) both hits lie on the ray's path through one
+ *    cell of edge E <= lod x spread x t (t the smaller hit distance; the
+ *    cell is entered before either) or within the patch's flatness
+ *    E / 8 of it along the normal, E / 4 along a ray at cos 0.5:
+ *    |dt| <= (sqrt(3) + 1/4) E < 2 lod spread t;
+ *  - silhouettes grow by less than one cell: a pixel hit only with level
+ *    of detail lies within ceil(lod) + 1 pixels of a full-detail hit;
+ *  - it pays: fewer node steps per ray at each threshold than below it. */
+static void test_iso_lod_against_full_detail(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 50000);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    enum { N = 128 };
+    const sg_vec3 eye = sg_v3(0.5f, 1.0f, 6.0f);
+    static float t_full[N * N], t_lod[N * N];
+    static uint8_t h_full[N * N];
+    const float lods[] = {0.0f, 1e-6f, 1.0f, 2.0f, 4.0f, 8.0f};
+    double prev_nodes = INFINITY;
+    for (size_t li = 0; li < sizeof lods / sizeof lods[0]; ++li) {
+        float lod = lods[li];
+        sg_iso_set_lod(iso, lod);
+        sg_ray_stats st = {0};
+        int holes = 0, far_depth = 0, far_silhouette = 0, lod_only = 0, interior = 0;
+        double worst = 0.0;
+        for (int y = 0; y < N; ++y)
+            for (int x = 0; x < N; ++x) {
+                int i = y * N + x;
+                sg_ray ray = camera_ray(eye, sg_v3(0, 0, 0), N, x, y);
+                ray.spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)N; /* a pixel's angle, about */
+                sg_hit h;
+                int got = sg_iso_intersect(iso, &ray, &h, &st);
+                if (got && (h.leaf >= info.leaf_count || sg_v3_dot(h.n, ray.dir) >= 0.0f))
+                    fail_msg("lod %g pixel (%d, %d): leaf %u of %zu, normal . dir %g", (double)lod, x, y, h.leaf,
+                             info.leaf_count, (double)sg_v3_dot(h.n, ray.dir));
+                if (li == 0) {
+                    h_full[i] = (uint8_t)got;
+                    t_full[i] = got ? h.t : 0.0f;
+                    t_lod[i] = got ? -sg_v3_dot(h.n, ray.dir) : 0.0f; /* cos at full detail, kept */
+                    continue;
+                }
+                if (lod < 1e-3f) { /* threshold -> 0: the same bits */
+                    if (got != h_full[i] || (got && memcmp(&h.t, &t_full[i], sizeof h.t)))
+                        fail_msg("lod %g pixel (%d, %d) differs from full detail", (double)lod, x, y);
+                    continue;
+                }
+                if (h_full[i] && !got) {
+                    ++holes;
+                    continue;
+                }
+                if (got && !h_full[i]) {
+                    ++lod_only;
+                    int r = (int)ceilf(lod) + 1, near = 0;
+                    for (int dy = -r; dy <= r && !near; ++dy)
+                        for (int dx = -r; dx <= r && !near; ++dx) {
+                            int xx = x + dx, yy = y + dy;
+                            near = xx >= 0 && yy >= 0 && xx < N && yy < N && h_full[yy * N + xx];
+                        }
+                    far_silhouette += !near;
+                    continue;
+                }
+                if (got && t_lod[i] >= 0.5f) {
+                    ++interior;
+                    float tm = fminf(h.t, t_full[i]), dt = fabsf(h.t - t_full[i]);
+                    float bound = 2.0f * lod * ray.spread * tm;
+                    worst = fmax(worst, (double)(dt / bound));
+                    far_depth += dt > bound;
+                }
+            }
+        double nodes = (double)st.nodes / (double)st.rays;
+        printf("lod %g: %.2f node steps per ray, %d holes, %d lod-only pixels (%d far from the silhouette), "
+               "%d of %d interior hits beyond the depth bound (worst %.3f of it)\n",
+               (double)lod, nodes, holes, lod_only, far_silhouette, far_depth, interior, worst);
+        if (holes || far_silhouette || far_depth)
+            fail_msg("lod %g: %d holes, %d lod-only pixels far from the silhouette, %d hits beyond the depth bound",
+                     (double)lod, holes, far_silhouette, far_depth);
+        if (lod >= 1.0f && !(nodes < prev_nodes))
+            fail_msg("lod %g: %.3f node steps per ray, not fewer than %.3f below it", (double)lod, nodes,
+                     prev_nodes);
+        if (lod >= 1.0f || li == 0)
+            prev_nodes = nodes;
+    }
     sg_iso_destroy(iso);
     sg_pointset_free(&ps);
 }
@@ -646,10 +813,13 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_iso_sphere_accuracy),
         cmocka_unit_test(test_iso_plane_exact),
+        cmocka_unit_test(test_iso_plane_grazing_either_face),
         cmocka_unit_test(test_iso_agrees_with_mls_sphere),
         cmocka_unit_test(test_iso_agrees_with_mls_bumpy),
         cmocka_unit_test(test_iso_agrees_with_mls_bunny),
         cmocka_unit_test(test_iso_intersect4_matches_single),
+        cmocka_unit_test(test_iso_intersect4_matches_single_lod),
+        cmocka_unit_test(test_iso_lod_against_full_detail),
         cmocka_unit_test(test_iso_sphere_no_holes),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
         cmocka_unit_test(test_iso_holes_stay_open),
