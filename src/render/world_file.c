@@ -237,8 +237,8 @@ static sg_status view(const sg_bake_file *f, const char *path, const char *tag, 
     return sg_bake_file_view(f, tag, data, err);
 }
 
-static sg_status load_model(const sg_bake_file *f, const char *path, size_t i, sg_scene_store *store,
-                            sg_scene **out, sg_error *err)
+static sg_status load_model(const sg_bake_file *f, const char *path, size_t i, const sg_scene_desc *query,
+                            sg_scene_store *store, sg_scene **out, sg_error *err)
 {
     memset(store, 0, sizeof *store);
     char tag[5];
@@ -274,7 +274,7 @@ static sg_status load_model(const sg_bake_file *f, const char *path, size_t i, s
         }
     char label[4300];
     snprintf(label, sizeof label, "%s: model %zu", path, i);
-    return sg_scene_from_store(store, label, out, err);
+    return sg_scene_from_store(store, label, query, out, err);
 }
 
 static sg_status open_world(const char *path, const sg_scene_file *sf, int map, sg_bake_file **out, sg_error *err)
@@ -354,7 +354,7 @@ sg_status sg_world_load(const char *path, const sg_scene_file *sf, const sg_worl
             SG_OK)
             goto fail;
     for (size_t i = 0; i < n; ++i) {
-        if ((st = load_model(w->file, path, i, store, &w->scenes[i], err)) != SG_OK)
+        if ((st = load_model(w->file, path, i, &sf->models[i].surface, store, &w->scenes[i], err)) != SG_OK)
             goto fail;
         sg_world__add_bounds(w, i);
     }

@@ -34,7 +34,7 @@ static const sg_scene_array_spec SPECS[SG_SA_COUNT] = {
     [SG_SA_SOA_NY] = {"SV", SG_STORE_F32, 1},      [SG_SA_SOA_NZ] = {"SW", SG_STORE_F32, 1},
     [SG_SA_SOA_R] = {"SR", SG_STORE_F32, 1},       [SG_SA_SOA_INV_R] = {"SI", SG_STORE_F32, 1},
     [SG_SA_SOA_ID] = {"SD", SG_STORE_U32, 1},      [SG_SA_SOA_KEY] = {"SK", SG_STORE_U32, 1},
-    [SG_SA_ISO_NODES] = {"ON", SG_STORE_U32, 3},   [SG_SA_ISO_LEAVES] = {"OL", SG_STORE_U32, 9},
+    [SG_SA_ISO_NODES] = {"ON", SG_STORE_U32, 9},   [SG_SA_ISO_LEAVES] = {"OL", SG_STORE_U32, 9},
     [SG_SA_ISO_CF] = {"OF", SG_STORE_U16, 1},      [SG_SA_ISO_CN] = {"OC", SG_STORE_U32, 1},
 };
 
@@ -42,7 +42,8 @@ static const sg_scene_array_spec SPECS[SG_SA_COUNT] = {
  * checksums or the file would carry as garbage. */
 _Static_assert(sizeof(sg_kd_node) == 8, "sg_kd_node: 2 x u32");
 _Static_assert(sizeof(sg_aabb) == 24, "sg_aabb: 6 x f32");
-_Static_assert(sizeof(iso_node) == 12, "iso_node: 3 x u32");
+_Static_assert(sizeof(iso_node) == 36, "iso_node: 9 x u32 (with its iso_lod)");
+_Static_assert(sizeof(iso_lod) == 24, "iso_lod: 6 x u32");
 _Static_assert(sizeof(iso_leaf) == 36, "iso_leaf: 9 x u32");
 
 const sg_scene_array_spec *sg_scene_array_spec_of(sg_scene_array_id id)
@@ -131,6 +132,8 @@ static void scalars(codec *c, sg_scene *sc, sg_iso *iso)
     c_int(c, &d->threads);
     c_f32(c, &d->iso_tolerance);
     c_int(c, &d->iso_max_depth);
+    c_f32(c, &d->iso_leaf_radii);
+    c_f32(c, &d->iso_lod); /* a query setting: a load takes the scene's */
     c_size(c, &sc->points.count);
 
     sg_kdtree *t = &sc->tree;
@@ -392,6 +395,13 @@ static sg_status check_iso(const sg_iso *o, size_t splats, const char *label, sg
         else if ((inner || leaves) && level[i] > o->max_depth)
             st = sg_error_set(err, SG_ERR_CORRUPT, "%s: octree node %zu: children below max depth %d", label, i,
                               o->max_depth);
+        else if (N->lod.pad != 0 || (N->lod.leaf != ISO_NO_LOD && N->lod.leaf >= o->leaf_count) ||
+                 isnan(N->lod.d) || isnan(N->lod.s_lo) || isnan(N->lod.s_hi))
+            st = sg_error_set(err, SG_ERR_CORRUPT,
+                              "%s: octree node %zu: coarse patch out of range (leaf %" PRIu32 " of %zu, d %g, slab "
+                              "%g..%g)",
+                              label, i, N->lod.leaf, o->leaf_count, (double)N->lod.d, (double)N->lod.s_lo,
+                              (double)N->lod.s_hi);
         for (unsigned k = 0; k < inner && st == SG_OK; ++k) {
             size_t c = N->inner_base + k;
             if (level[c])
@@ -425,7 +435,8 @@ static sg_status check_colours(const sg_pointset *p, const char *label, sg_error
 
 /* ---- load ------------------------------------------------------------------ */
 
-sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_scene **out, sg_error *err)
+sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, const sg_scene_desc *query,
+                              sg_scene **out, sg_error *err)
 {
     assert(in && label && out);
     sg_status st = SG_OK;
@@ -445,6 +456,8 @@ sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_sc
     else
         sg_free(iso);
     iso = NULL;
+    if (query)
+        sc->desc.iso_lod = query->iso_lod;
     if ((st = check_desc(sc, label, err)) != SG_OK)
         goto fail;
 
@@ -480,6 +493,14 @@ sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_sc
         o->cn = (uint32_t *)in->data[SG_SA_ISO_CN];
         if ((st = check_iso(o, n, label, err)) != SG_OK)
             goto fail;
+        /* as sg_iso_create maps its desc's lod (iso.h): 0 the default,
+         * negative off */
+        float lod = sc->desc.iso_lod;
+        if (!isfinite(lod)) {
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: level of detail %g is not finite", label, (double)lod);
+            goto fail;
+        }
+        sg_iso_set_lod(o, lod == 0.0f ? SG_ISO_LOD_DEFAULT : lod < 0.0f ? 0.0f : lod);
         if ((st = sg_iso_sites_create(o, p, &sc->iso_sites, err)) != SG_OK)
             goto fail;
         sc->sites = sc->iso_sites.view;

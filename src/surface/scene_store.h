@@ -88,9 +88,13 @@ typedef struct sg_scene_store {
 void sg_scene_store_of(const sg_scene *sc, sg_scene_store *out);
 
 /* A scene over in's arrays (borrowed, see Lifetime), after the checks of
- * Validation; label starts every message. Arrays must be 64-byte aligned
+ * Validation; label starts every message. query (may be NULL: as stored)
+ * gives the settings that steer queries, not the build, and are no part of
+ * a scene's hash: its iso_lod replaces the stored one, so a loaded scene
+ * traces as one built with query's desc. Arrays must be 64-byte aligned
  * (asserted: the caller's, not the file's). SG_ERR_CORRUPT,
  * SG_ERR_NOMEM; *out only on SG_OK. */
-sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, sg_scene **out, sg_error *err);
+sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, const sg_scene_desc *query,
+                              sg_scene **out, sg_error *err);
 
 #endif

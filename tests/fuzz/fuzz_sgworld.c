@@ -113,7 +113,7 @@ static void store_mode(const uint8_t *data, size_t size)
     }
     sg_scene *sc = NULL;
     sg_error err;
-    if (sg_scene_from_store(&st, "fuzz", &sc, &err) == SG_OK) {
+    if (sg_scene_from_store(&st, "fuzz", NULL, &sc, &err) == SG_OK) {
         for (int k = 0; k < 16; ++k) {
             float a = 0.39269908f * (float)k;
             sg_ray r = {.org = {4 * cosf(a), 1.5f, 4 * sinf(a)}, .tmin = 0, .tmax = INFINITY};

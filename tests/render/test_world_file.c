@@ -359,6 +359,56 @@ static void test_world_file_load_nomem(void **state)
     }
 }
 
+/* A 96 x 80 frame of model m (camera rays carry a footprint, so the
+ * ISO's level of detail applies) into a malloc'd RGB array. */
+static float *frame_of(const sg_world *w, uint32_t m)
+{
+    sg_render_desc rd = {.width = 96, .height = 80, .shade = SG_SHADE_SIMPLE, .threads = 1};
+    sg_error err = {0};
+    assert_int_equal(sg_camera_look_at(sg_v3(9, 5, 14), sg_v3(2.5f, 0, 0), sg_v3(0, 1, 0), 30.0f, 96.0f / 80.0f,
+                                       &rd.camera, &err),
+                     SG_OK);
+    sg_image img = {0};
+    assert_int_equal(sg_render_frame(sg_world_scene(w, m), &rd, &img, NULL, &err), SG_OK);
+    float *px = malloc(sizeof(float) * 3 * 96 * 80);
+    assert_non_null(px);
+    memcpy(px, img.data, sizeof(float) * 3 * 96 * 80);
+    sg_image_free(&img);
+    return px;
+}
+
+/* 9. The ISO's level of detail steers queries, not the build, and is no
+ * part of the scene hash: a world saved with the default loads for a
+ * scene asking "iso_lod": 16 and traces as a world built with 16 (and
+ * not as the default, or this would prove nothing). */
+static void test_world_file_iso_lod_from_scene(void **state)
+{
+    (void)state;
+    char json[sizeof SCENE_A + 64];
+    const char *iso = strstr(SCENE_A, "\"model\": \"iso\"");
+    assert_non_null(iso);
+    int at = (int)(iso - SCENE_A);
+    snprintf(json, sizeof json, "%.*s\"model\": \"iso\", \"iso_lod\": 16%s", at, SCENE_A,
+             iso + strlen("\"model\": \"iso\""));
+    sg_scene_file s16 = {0};
+    parse(json, &s16);
+    sg_error err = {0};
+    sg_world *built16 = NULL, *loaded16 = NULL;
+    assert_int_equal(sg_world_create(&s16, &built16, &err), SG_OK);
+    if (sg_world_load(world_path, &s16, NULL, &loaded16, &err) != SG_OK)
+        fail_msg("load with iso_lod 16: %s", err.message);
+    float *a = frame_of(built16, 2), *b = frame_of(loaded16, 2), *c = frame_of(built, 2);
+    assert_memory_equal(a, b, sizeof(float) * 3 * 96 * 80);
+    if (memcmp(a, c, sizeof(float) * 3 * 96 * 80) == 0)
+        fail_msg("iso_lod 16 renders as the default: the test cannot tell the two apart");
+    free(a);
+    free(b);
+    free(c);
+    sg_world_destroy(loaded16);
+    sg_world_destroy(built16);
+    sg_scene_file_free(&s16);
+}
+
 /* ---- the arrays behind a file: checks before use (scene_store.h) ----- */
 
 typedef struct copied {
@@ -394,14 +444,14 @@ static void expect_store(const copied *c, sg_status want, const char *needle)
 {
     sg_error err = {0};
     sg_scene *sc = NULL;
-    sg_status st = sg_scene_from_store(&c->store, "m", &sc, &err);
+    sg_status st = sg_scene_from_store(&c->store, "m", NULL, &sc, &err);
     sg_scene_destroy(sc);
     if (st != want || (needle && !strstr(err.message, needle)))
         fail_msg("status %d (want %d), message \"%s\" (want \"%s\")", (int)st, (int)want,
                  st == SG_OK ? "" : err.message, needle ? needle : "");
 }
 
-/* 9. An untouched copy loads; NaN in positions, radii, normals, colours,
+/* 10. An untouched copy loads; NaN in positions, radii, normals, colours,
  * split planes or the leaf copies does not. */
 static void test_scene_store_nan(void **state)
 {
@@ -432,7 +482,7 @@ static void test_scene_store_nan(void **state)
     }
 }
 
-/* 10. Broken links: child indices, leaf numbers, references, offsets,
+/* 11. Broken links: child indices, leaf numbers, references, offsets,
  * octree corners, and arrays of the wrong length or missing. */
 static void test_scene_store_links(void **state)
 {
@@ -500,6 +550,7 @@ int main(void)
         cmocka_unit_test(test_world_file_changed_input),
         cmocka_unit_test(test_world_file_failed_save),
         cmocka_unit_test(test_world_file_load_nomem),
+        cmocka_unit_test(test_world_file_iso_lod_from_scene),
         cmocka_unit_test(test_scene_store_nan),
         cmocka_unit_test(test_scene_store_links),
     };
