@@ -55,7 +55,10 @@ static const char usage[] =
     "  --threads T       OpenMP threads (default: all); results do not depend on it\n"
     "  --if-stale        do nothing when OUT already holds a bake of this scene with\n"
     "                    these parameters and this format (checked by its header),\n"
-    "                    newer than the scene's model and envmap files\n"
+    "                    newer than the scene's model and envmap files; with\n"
+    "                    --world, also rebuild and rewrite a stale world file\n"
+    "  --world FILE      load the models from this world file (splatgi-world,\n"
+    "                    docs/world.md) instead of building them\n"
     "  --resume          continue from OUT.ckpt, left by an interrupted run with the\n"
     "                    same scene and options\n"
     "  --help\n"
@@ -81,6 +84,7 @@ typedef struct options {
     int if_stale;   /* --if-stale: keep an OUT made for this scene and these parameters */
     sg_model_scene_desc model; /* the scene made for a model file      */
     const char *write_scene;   /* --write-scene                        */
+    sg_prog_world world;       /* --world; --if-stale applies to it too */
 } options;
 
 typedef struct progress {
@@ -192,6 +196,12 @@ static int parse_args(int argc, char **argv, options *o)
             o->resume = 1;
         } else if (!strcmp(a, "--if-stale")) {
             o->if_stale = 1;
+            o->world.if_stale = 1;
+        } else if (!strcmp(a, "--world")) {
+            if (!v)
+                return fprintf(stderr, "splatgi-bake: %s needs a value\n", a), 1;
+            o->world.path = v;
+            ++i;
         } else if (!strcmp(a, "-o") || !strcmp(a, "--out")) {
             if (!v)
                 return fprintf(stderr, "splatgi-bake: %s needs a value\n", a), 1;
@@ -288,6 +298,8 @@ int main(int argc, char **argv)
     int pr = parse_args(argc, argv, &o);
     if (pr)
         return pr == 2 ? 0 : 1;
+    if (!o.world.path)
+        o.world.if_stale = 0; /* --if-stale alone is about the bake */
     char out_buf[4200], ckpt[4300];
     if (!o.out && sg_model_scene_is_model(o.scene)) {
         /* Where splatgi-view MODEL looks (app/bake_cache.h). */
@@ -351,7 +363,7 @@ int main(int argc, char **argv)
     }
     /* Where the bake goes, and the memory it needs, before the world. */
     if (sg_prog_check_output(o.out, &err) != SG_OK ||
-        sg_prog_build_world(o.scene, &sf, sg_photon_map_bytes(2 * d.photons.count), &world, &err) != SG_OK) {
+        sg_prog_build_world(o.scene, &sf, sg_photon_map_bytes(2 * d.photons.count), &o.world, &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
     }

@@ -46,7 +46,7 @@ extras() {
   find "$data" -type f -iname "*.$ext" -size -2M 2>/dev/null | head -8
 }
 
-formats=(ply obj xyz pcd hdr exr scene sgbake)
+formats=(ply obj xyz pcd hdr exr scene sgbake sgworld)
 failed=0
 mkdir -p build-fuzz/artifacts
 for f in "${formats[@]}"; do

@@ -13,6 +13,7 @@
 #include "app/bake_cache.h"
 #include "app/preflight.h"
 #include "bake/bake_io.h"
+#include "render/world_file.h"
 
 static const char *prog = "splatgi"; /* set once by sg_prog_init */
 
@@ -76,8 +77,25 @@ static void on_world_event(void *user, sg_world_event kind, const char *message)
         sg_prog_say("note: %s", message);
 }
 
-sg_status sg_prog_build_world(const char *input, const sg_scene_file *sf, uint64_t extra_bytes, sg_world **out,
-                              sg_error *err)
+int sg_prog_world_option(int argc, char **argv, int *i, sg_prog_world *wo, sg_error *err)
+{
+    const char *a = argv[*i];
+    if (!strcmp(a, "--if-stale")) {
+        wo->if_stale = 1;
+        return 1;
+    }
+    if (strcmp(a, "--world"))
+        return 0;
+    if (*i + 1 >= argc) {
+        sg_error_set(err, SG_ERR_INVALID_ARG, "--world needs a value");
+        return -1;
+    }
+    wo->path = argv[++*i];
+    return 1;
+}
+
+static sg_status build_world(const char *input, const sg_scene_file *sf, uint64_t extra_bytes, sg_world **out,
+                             sg_error *err)
 {
     const char *skip = getenv("SPLATGI_NO_MEMORY_CHECK");
     if (!(skip && !strcmp(skip, "1"))) {
@@ -97,6 +115,49 @@ sg_status sg_prog_build_world(const char *input, const sg_scene_file *sf, uint64
     if (st == SG_OK)
         sg_prog_say("%5.1f s  world built", omp_get_wtime() - p.t0);
     return st;
+}
+
+sg_status sg_prog_build_world(const char *input, const sg_scene_file *sf, uint64_t extra_bytes,
+                              const sg_prog_world *wo, sg_world **out, sg_error *err)
+{
+    if (!wo || !wo->path) {
+        if (wo && wo->if_stale)
+            return sg_error_set(err, SG_ERR_INVALID_ARG, "--if-stale goes with --world FILE");
+        return build_world(input, sf, extra_bytes, out, err);
+    }
+    char why[SG_ERROR_MESSAGE_MAX];
+    sg_status st = SG_OK;
+    if (sg_world_file_fresh(wo->path, sf, why, sizeof why)) {
+        world_progress p = {omp_get_wtime()};
+        sg_world_desc d = {.on_event = on_world_event, .user = &p};
+        st = sg_world_load(wo->path, sf, &d, out, err);
+        if (st == SG_OK) {
+            sg_prog_say("%5.1f s  world loaded from %s", omp_get_wtime() - p.t0, wo->path);
+            return SG_OK;
+        }
+        if (!wo->if_stale)
+            return st;
+        snprintf(why, sizeof why, "%s", err->message); /* damaged: build it again */
+    } else if (!wo->if_stale) {
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s (--if-stale rebuilds it; or: splatgi-world %s -o %s)", why,
+                            input, wo->path);
+    }
+    if ((st = sg_world_file_replaceable(wo->path, err)) != SG_OK)
+        return st;
+    sg_prog_say("%s: building the world again: %s", wo->path, why);
+    if ((st = sg_prog_check_output(wo->path, err)) != SG_OK)
+        return st;
+    sg_world *w = NULL;
+    if ((st = build_world(input, sf, extra_bytes, &w, err)) != SG_OK)
+        return st;
+    double t0 = omp_get_wtime();
+    if ((st = sg_world_save(w, sf, wo->path, err)) != SG_OK) {
+        sg_world_destroy(w);
+        return st;
+    }
+    sg_prog_say("%5.1f s  wrote the world to %s", omp_get_wtime() - t0, wo->path);
+    *out = w;
+    return SG_OK;
 }
 
 sg_status sg_prog_bake_plan(const char *input, const char *output, const char *explicit_bake,

@@ -30,12 +30,35 @@ void sg_prog_say(const char *fmt, ...)
 sg_status sg_prog_load_scene(const char *input, sg_model_scene_desc *md, const char *write_scene,
                              sg_scene_file *sf, sg_error *err);
 
-/* The memory check (app/preflight.h; skipped when the environment has
- * SPLATGI_NO_MEMORY_CHECK=1), then the world, saying each stage and every
+/* Where the world comes from (render/world_file.h): --world FILE and
+ * --if-stale, which every program that builds a world takes. */
+typedef struct sg_prog_world {
+    const char *path; /* --world: the world file; NULL: build it         */
+    int if_stale;     /* --if-stale: build and rewrite path when it is
+                         missing, stale or unreadable, instead of failing */
+} sg_prog_world;
+
+/* If argv[*i] is --world FILE or --if-stale, reads it into *wo (advancing
+ * *i past a value) and returns 1; 0 for any other argument; -1 with err
+ * set for a missing value. SG_PROG_WORLD_OPTIONS is their --help text. */
+int sg_prog_world_option(int argc, char **argv, int *i, sg_prog_world *wo, sg_error *err);
+
+#define SG_PROG_WORLD_OPTIONS                                                                                      \
+    "World file (docs/world.md): the built models saved once (splatgi-world)\n"                                     \
+    "  --world FILE.sgworld  load the models from FILE instead of building them; it\n"                              \
+    "                      must be of this scene and its model files unchanged\n"                                  \
+    "  --if-stale          with --world: build the models and (re)write FILE when it\n"                            \
+    "                      is missing, of another scene, an input changed or it is damaged\n"
+
+/* The world of sf. Without wo->path (wo may be NULL): the memory check
+ * (app/preflight.h; skipped when the environment has
+ * SPLATGI_NO_MEMORY_CHECK=1), then the build, saying each stage and every
  * note on stderr as it comes. extra_bytes: what the program adds (a bake's
- * photon records). */
-sg_status sg_prog_build_world(const char *input, const sg_scene_file *sf, uint64_t extra_bytes, sg_world **out,
-                              sg_error *err);
+ * photon records). With wo->path: loads that world file when it is fresh
+ * (render/world_file.h); otherwise an error saying why, or with
+ * wo->if_stale the build as above and the file written. */
+sg_status sg_prog_build_world(const char *input, const sg_scene_file *sf, uint64_t extra_bytes,
+                              const sg_prog_world *wo, sg_world **out, sg_error *err);
 
 /* An output about to be written: its folder is made when missing (one
  * level: "out" for out/frame.png, not a whole path), then checked for

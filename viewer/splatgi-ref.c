@@ -43,7 +43,7 @@ static const char usage[] =
     "                    alpha: coverage, the share of a pixel showing a model\n"
     "                    (4 x 4 rays a pixel; 1 with --pixel-centres)\n"
     "  --help\n"
-    "\n" SG_MODEL_SCENE_OPTIONS;
+    "\n" SG_PROG_WORLD_OPTIONS "\n" SG_MODEL_SCENE_OPTIONS;
 
 static int fail(const char *msg)
 {
@@ -122,11 +122,14 @@ int main(int argc, char **argv)
     long spp = 0, depth = -1, width = 0, height = 0, threads = 0, seed = -1;
     int progressive = 0, centres = 0;
     sg_model_scene_desc md = {0};
+    sg_prog_world wo = {0}; /* --world, --if-stale */
     sg_prog_init("splatgi-ref");
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         sg_error oe = {0};
         int ms = sg_model_scene_option(argc, argv, &i, &md, &write_scene, &oe);
+        if (ms == 0)
+            ms = sg_prog_world_option(argc, argv, &i, &wo, &oe);
         if (ms < 0)
             return fail(oe.message);
         if (ms)
@@ -190,7 +193,7 @@ int main(int argc, char **argv)
         goto done;
     }
     /* Where the outputs go, before the world is built. */
-    if (sg_prog_check_output(out, &err) != SG_OK || sg_prog_build_world(scene_path, &sf, 0, &world, &err) != SG_OK) {
+    if (sg_prog_check_output(out, &err) != SG_OK || sg_prog_build_world(scene_path, &sf, 0, &wo, &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
     }

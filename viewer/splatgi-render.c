@@ -79,7 +79,7 @@ static const char usage[] =
     "  --out FILE          .exr (scene-linear) or .png (sRGB); default " DEFAULT_OUT "\n"
     "  --stats             print per-ray traversal statistics and scene facts\n"
     "  --help              this text\n"
-    "\n" SG_MODEL_SCENE_OPTIONS;
+    "\n" SG_PROG_WORLD_OPTIONS "\n" SG_MODEL_SCENE_OPTIONS;
 
 typedef struct options {
     const char *model;          /* NULL: default scene                  */
@@ -100,6 +100,7 @@ typedef struct options {
     int have_width, have_height, have_model;
     sg_model_scene_desc model_scene; /* --envmap, --up AXIS, ...         */
     const char *write_scene;    /* --write-scene                        */
+    sg_prog_world world;        /* --world, --if-stale                  */
 } options;
 
 static int fail(const char *fmt, ...)
@@ -154,6 +155,8 @@ static int parse_args(int argc, char **argv, options *o)
         if (!strcmp(a, "--no-refine")) { o->scene.kd_disable |= SG_KD_NO_REFINEMENTS; continue; }
         sg_error e = {0};
         int ms = sg_model_scene_option(argc, argv, &i, &o->model_scene, &o->write_scene, &e);
+        if (ms == 0)
+            ms = sg_prog_world_option(argc, argv, &i, &o->world, &e);
         if (ms < 0)
             return fail("%s", e.message);
         if (ms)
@@ -282,7 +285,7 @@ static int render_from_bake(const options *o0)
         sg_prog_bake_plan(o->scene_file, o->out, o->bake, &sf, &plan, &err) != SG_OK)
         goto done;
     double t0 = omp_get_wtime();
-    if (sg_prog_build_world(o->scene_file, &sf, 0, &world, &err) != SG_OK)
+    if (sg_prog_build_world(o->scene_file, &sf, 0, &o->world, &world, &err) != SG_OK)
         goto done;
     double t_world = omp_get_wtime() - t0;
     t0 = omp_get_wtime();

@@ -65,7 +65,7 @@ static const char usage[] =
     "  --frames N          quit after N window frames\n"
     "  --screenshot-on-exit FILE.png   read the window back into a PNG on exit\n"
     "  --help              this text\n"
-    "\n" SG_MODEL_SCENE_OPTIONS "\n" KEYS_HELP;
+    "\n" SG_PROG_WORLD_OPTIONS "\n" SG_MODEL_SCENE_OPTIONS "\n" KEYS_HELP;
 
 typedef struct options {
     const char *scene;      /* positional                              */
@@ -83,6 +83,7 @@ typedef struct options {
     const char *screenshot; /* --screenshot-on-exit                    */
     sg_model_scene_desc model; /* the scene made for a model file     */
     const char *write_scene;   /* --write-scene                       */
+    sg_prog_world world;       /* --world, --if-stale                 */
 } options;
 
 static int fail(const char *fmt, ...)
@@ -120,6 +121,8 @@ static int parse_args(int argc, char **argv, options *o)
         if (!strcmp(a, "--exr")) { o->exr = 1; continue; }
         sg_error e = {0};
         int m = sg_model_scene_option(argc, argv, &i, &o->model, &o->write_scene, &e);
+        if (m == 0)
+            m = sg_prog_world_option(argc, argv, &i, &o->world, &e);
         if (m < 0)
             return fail("%s", e.message);
         if (m)
@@ -222,7 +225,7 @@ static int viewer_load(viewer *v, sg_error *err)
     if (sg_prog_bake_plan(o->scene, NULL, o->bake, &v->sf, &plan, err) != SG_OK)
         return 0;
     double t0 = omp_get_wtime();
-    if (sg_prog_build_world(o->scene, &v->sf, 0, &v->world, err) != SG_OK)
+    if (sg_prog_build_world(o->scene, &v->sf, 0, &o->world, &v->world, err) != SG_OK)
         return 0;
     double t1 = omp_get_wtime();
     if (sg_prog_bake_obtain(&plan, &v->sf, v->world, &v->bake, err) != SG_OK)

@@ -34,6 +34,9 @@
  *     Nothing is allocated from a file value before it was bounded: the
  *     table is at most SG_BAKE_MAX_SECTIONS entries and must fit in the file;
  *     payload sizes must fit in the file before the caller sees them.
+ *  6. Reader with a map (open_desc .map): f->map holds the whole file from
+ *     open to close, so views (sg_bake_file_view) stay valid that long;
+ *     each view checks its payload's CRC before handing it out.
  */
 #include "bake/bake_file.h"
 
@@ -45,6 +48,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <unistd.h>
@@ -59,7 +63,13 @@
 #error "bake_file.c: .sgbake payloads are little-endian; big-endian hosts need byte swapping here"
 #endif
 
-static const uint8_t MAGIC[8] = {'S', 'G', 'B', 'A', 'K', 'E', 0, '\n'};
+/* Magic and noun per sg_bake_kind (bake_file.h): the same container holds
+ * bakes and worlds, and a file of one kind opened as the other says so. */
+static const uint8_t MAGIC[2][8] = {{'S', 'G', 'B', 'A', 'K', 'E', 0, '\n'},
+                                    {'S', 'G', 'W', 'R', 'L', 'D', 0, '\n'}};
+static const char *const NOUN[2] = {"bake", "world"};
+
+static bool kind_ok(sg_bake_kind k) { return k == SG_BAKE_KIND_BAKE || k == SG_BAKE_KIND_WORLD; }
 
 /* Largest piece handed to one write/pread/crc32 call: Linux moves at most
  * 0x7ffff000 bytes per call and zlib's crc32 takes a uInt length. */
@@ -224,6 +234,7 @@ struct sg_bake_writer {
     uint64_t scene_hash;       /* header offset 16                            */
     uint64_t param_hash;       /* header offset 24                            */
     uint32_t flags;            /* header offset 12                            */
+    sg_bake_kind kind;         /* picks the magic at offset 0                 */
     uint32_t capacity;         /* table entries reserved                      */
     uint32_t count;            /* finished sections (invariant 2)             */
     sg_bake_section *sections; /* capacity entries                            */
@@ -277,6 +288,8 @@ sg_status sg_bake_writer_create(const sg_bake_writer_desc *d, sg_bake_writer **o
                             d->max_sections, SG_BAKE_MAX_SECTIONS);
     if (d->flags & ~(uint32_t)SG_BAKE_KNOWN_FLAGS)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown bake flags 0x%" PRIx32, d->path, d->flags);
+    if (!kind_ok(d->kind))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown file kind %d", d->path, (int)d->kind);
 
     sg_status st = SG_OK;
     sg_bake_writer *w = calloc(1, sizeof *w);
@@ -287,6 +300,7 @@ sg_status sg_bake_writer_create(const sg_bake_writer_desc *d, sg_bake_writer **o
     w->scene_hash = d->scene_hash;
     w->param_hash = d->param_hash;
     w->flags = d->flags;
+    w->kind = d->kind;
     w->capacity = d->max_sections ? d->max_sections : SG_BAKE_DEFAULT_SECTIONS;
     w->path = dup_string(d->path, 0);
     w->tmp_path = dup_string(d->path, strlen(".tmp.XXXXXX"));
@@ -452,7 +466,7 @@ static void encode_front(const sg_bake_writer *w, uint8_t *buf)
 {
     size_t tsize = (size_t)SG_BAKE_ENTRY_SIZE * w->capacity;
     memset(buf, 0, (size_t)table_end(w->capacity));
-    memcpy(buf, MAGIC, 8);
+    memcpy(buf, MAGIC[w->kind], 8);
     put_u32(buf + 8, SG_BAKE_FORMAT_VERSION);
     put_u32(buf + 12, w->flags);
     put_u64(buf + 16, w->scene_hash);
@@ -553,11 +567,15 @@ struct sg_bake_file {
     char *path;                /* for messages                              */
     sg_bake_info info;         /* header fields                             */
     sg_bake_section *sections; /* info.section_count validated entries      */
+    const uint8_t *map;        /* the whole file (open_desc .map), or NULL  */
+    bool map_read;             /* map is a read copy (sg_alloc_array), not
+                                  an mmap                                   */
 };
 
 /* Checks the 48 header bytes h of a file of size bytes (size >= 48). */
 static sg_status check_header(const char *path, const uint8_t *h, uint64_t size, uint64_t scene_hash,
-                              uint64_t param_hash, sg_bake_info *info, uint32_t *cap, sg_error *err)
+                              uint64_t param_hash, sg_bake_kind kind, sg_bake_info *info, uint32_t *cap,
+                              sg_error *err)
 {
     uint32_t stored = get_u32(h + 44);
     uint32_t computed = (uint32_t)crc32(0, h, 44);
@@ -602,9 +620,9 @@ static sg_status check_header(const char *path, const uint8_t *h, uint64_t size,
                             path, info->scene_hash, scene_hash);
     if (param_hash != 0 && info->param_hash != param_hash)
         return sg_error_set(err, SG_ERR_INVALID_ARG,
-                            "%s: made with other bake parameters (parameter hash %016" PRIx64
+                            "%s: made with other %s parameters (parameter hash %016" PRIx64
                             ", these parameters %016" PRIx64 ")",
-                            path, info->param_hash, param_hash);
+                            path, NOUN[kind], info->param_hash, param_hash);
     return SG_OK;
 }
 
@@ -694,9 +712,44 @@ static sg_status check_padding(int fd, const char *path, uint64_t from, uint64_t
 sg_status sg_bake_file_open(const char *path, uint64_t scene_hash, uint64_t param_hash,
                             sg_bake_file **out, sg_error *err)
 {
-    assert(out);
+    sg_bake_open_desc d = {.scene_hash = scene_hash, .param_hash = param_hash};
+    return sg_bake_file_open_desc(path, &d, out, err);
+}
+
+/* The whole file in memory for sg_bake_file_view: mapped read-only, or read
+ * into one aligned buffer where mmap fails (a file system without it). */
+static sg_status map_file(sg_bake_file *f, uint64_t size, sg_error *err)
+{
+    if (size > SIZE_MAX)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: %" PRIu64 " bytes exceed the address space", f->path, size);
+    void *p = mmap(NULL, (size_t)size, PROT_READ, MAP_PRIVATE, f->fd, 0);
+    if (p != MAP_FAILED) {
+        f->map = p;
+        return SG_OK;
+    }
+    uint8_t *buf = sg_alloc_array((size_t)size, 1);
+    if (!buf)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: cannot map the file (%s) nor read its %" PRIu64 " bytes",
+                            f->path, strerror(errno), size);
+    int64_t got = pread_all(f->fd, buf, size, 0);
+    if (got < 0 || (uint64_t)got != size) {
+        sg_free(buf);
+        return got < 0 ? sg_error_set(err, SG_ERR_IO, "%s: read failed: %s", f->path, strerror(errno))
+                       : sg_error_set(err, SG_ERR_CORRUPT, "%s: truncated while reading it whole", f->path);
+    }
+    f->map = buf;
+    f->map_read = true;
+    return SG_OK;
+}
+
+sg_status sg_bake_file_open_desc(const char *path, const sg_bake_open_desc *d, sg_bake_file **out, sg_error *err)
+{
+    assert(out && d);
+    sg_bake_kind kind = d->kind;
+    if (!kind_ok(kind))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: unknown file kind %d", path ? path : "(null)", (int)kind);
     if (!path || !path[0])
-        return sg_error_set(err, SG_ERR_INVALID_ARG, "bake file path is empty");
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s file path is empty", NOUN[kind]);
 
     sg_status st = SG_OK;
     uint8_t *table = NULL;     /* capacity entries + table CRC, from the file */
@@ -738,11 +791,16 @@ sg_status sg_bake_file_open(const char *path, uint64_t scene_hash, uint64_t para
         goto done;
     }
     if (size == 0) {
-        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: not a splatgi bake file (it is empty)", path);
+        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: not a splatgi %s file (it is empty)", path, NOUN[kind]);
         goto done;
     }
-    if (memcmp(h, MAGIC, hn < 8 ? (size_t)hn : 8) != 0) {
-        st = sg_error_set(err, SG_ERR_CORRUPT, "%s: not a splatgi bake file", path);
+    if (memcmp(h, MAGIC[kind], hn < 8 ? (size_t)hn : 8) != 0) {
+        sg_bake_kind other = kind == SG_BAKE_KIND_BAKE ? SG_BAKE_KIND_WORLD : SG_BAKE_KIND_BAKE;
+        if (hn >= 8 && memcmp(h, MAGIC[other], 8) == 0)
+            st = sg_error_set(err, SG_ERR_INVALID_ARG, "%s: a splatgi %s file, not a %s file", path, NOUN[other],
+                              NOUN[kind]);
+        else
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: not a splatgi %s file", path, NOUN[kind]);
         goto done;
     }
     if (size < SG_BAKE_HEADER_SIZE) {
@@ -751,7 +809,7 @@ sg_status sg_bake_file_open(const char *path, uint64_t scene_hash, uint64_t para
         goto done;
     }
     uint32_t cap = 0; /* table capacity */
-    st = check_header(path, h, size, scene_hash, param_hash, &f->info, &cap, err);
+    st = check_header(path, h, size, d->scene_hash, d->param_hash, kind, &f->info, &cap, err);
     if (st != SG_OK)
         goto done;
 
@@ -825,6 +883,9 @@ sg_status sg_bake_file_open(const char *path, uint64_t scene_hash, uint64_t para
                           path, size - end, end);
         goto done;
     }
+    f->info.kind = kind;
+    if (d->map && size > 0 && (st = map_file(f, size, err)) != SG_OK)
+        goto done;
     *out = f;
     f = NULL;
 
@@ -893,10 +954,50 @@ sg_status sg_bake_file_read(const sg_bake_file *f, const char *tag, void *dst, u
     return SG_OK;
 }
 
+sg_status sg_bake_file_view(const sg_bake_file *f, const char *tag, const void **data, sg_error *err)
+{
+    assert(f && data);
+    if (!f->map)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: opened without .map: no views", f->path);
+    const sg_bake_section *s = sg_bake_file_find(f, tag);
+    if (!s)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: no section %s", f->path, tag_arg_ok(tag) ? tag : "(bad tag)");
+    /* A file cut short in place after open would fault on access (SIGBUS);
+     * our writers never do that (they rename), but another tool might. */
+    struct stat sb;
+    if (!f->map_read && (fstat(f->fd, &sb) != 0 || (uint64_t)sb.st_size < f->info.file_size))
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: section %s: the file shrank after it was opened", f->path,
+                            s->tag);
+    uint32_t crc = crc_update((uint32_t)crc32(0, Z_NULL, 0), f->map + s->offset, s->size);
+    if (crc != s->crc)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: section %s: checksum mismatch (stored %08" PRIx32 ", computed %08" PRIx32 ")",
+                            f->path, s->tag, s->crc, crc);
+    *data = f->map + s->offset;
+    return SG_OK;
+}
+
+int sg_bake_file_has_magic(const char *path, sg_bake_kind kind)
+{
+    if (!path || !kind_ok(kind))
+        return 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    uint8_t h[8];
+    int64_t got = pread_all(fd, h, sizeof h, 0);
+    close(fd);
+    return got == (int64_t)sizeof h && memcmp(h, MAGIC[kind], sizeof h) == 0;
+}
+
 void sg_bake_file_close(sg_bake_file *f)
 {
     if (!f)
         return;
+    if (f->map && f->map_read)
+        sg_free((void *)f->map);
+    else if (f->map)
+        munmap((void *)f->map, (size_t)f->info.file_size);
     if (f->fd >= 0)
         close(f->fd);
     free(f->sections);

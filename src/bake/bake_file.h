@@ -42,6 +42,13 @@
  *     sg_bake_file_read(f, "IRRD", irr, s->size, &err);  (CRC checked here)
  *     sg_bake_file_close(f);
  *
+ * World files (render/world_file.h) use the same container with their own
+ * magic: a writer with .kind = SG_BAKE_KIND_WORLD, read with
+ * sg_bake_file_open_desc (.kind the same, .map = 1 to take payloads in
+ * place with sg_bake_file_view instead of copying them). A file of one
+ * kind opened as the other is SG_ERR_INVALID_ARG ("x.sgworld: a splatgi
+ * bake file, not a world file").
+ *
  * Checkpoints (resume after Ctrl-C) use the same container: a writer with
  * .flags = SG_BAKE_FLAG_CHECKPOINT, the same scene and parameter hashes and
  * the tags of the partial state, committed to e.g. "bunny.sgbake.ckpt"; the
@@ -57,7 +64,8 @@
  * Header, 48 bytes at offset 0 (this layout of bytes 0..47, CRC included, is
  * kept by every later version, so the reader can tell "newer" from "corrupt"):
  *   off size  meaning
- *     0    8  magic "SGBAKE\0\n" (53 47 42 41 4B 45 00 0A)
+ *     0    8  magic "SGBAKE\0\n" (53 47 42 41 4B 45 00 0A); a world file
+ *             (SG_BAKE_KIND_WORLD) has "SGWRLD\0\n" here, all else the same
  *     8    4  format version; 1 (SG_BAKE_FORMAT_VERSION). 0 is corrupt, a
  *             larger value is SG_ERR_UNSUPPORTED.
  *    12    4  flags: bit 0 SG_BAKE_FLAG_CHECKPOINT; other bits must be 0
@@ -141,6 +149,12 @@ typedef enum sg_bake_type {
     SG_BAKE_TYPE_F64 = 8    /* size 8 */
 } sg_bake_type;
 
+/* What the container holds; picks the magic (file offset 0). */
+typedef enum sg_bake_kind {
+    SG_BAKE_KIND_BAKE = 0, /* "SGBAKE\0\n": a bake or checkpoint (bake_io.h) */
+    SG_BAKE_KIND_WORLD = 1 /* "SGWRLD\0\n": a built world (world_file.h)     */
+} sg_bake_kind;
+
 /* Header flags (file offset 12). */
 #define SG_BAKE_FLAG_CHECKPOINT (1u << 0) /* partial bake state, not a result */
 #define SG_BAKE_KNOWN_FLAGS SG_BAKE_FLAG_CHECKPOINT
@@ -159,6 +173,7 @@ typedef struct sg_bake_writer_desc {
     uint32_t flags;        /* SG_BAKE_FLAG_*; default 0 (a finished bake)     */
     uint32_t max_sections; /* table capacity, 1..SG_BAKE_MAX_SECTIONS;
                               0 = SG_BAKE_DEFAULT_SECTIONS                    */
+    sg_bake_kind kind;     /* default SG_BAKE_KIND_BAKE                       */
 } sg_bake_writer_desc;
 
 /* Creates the temporary file path + ".tmp.XXXXXX" (mkstemp) in the
@@ -207,6 +222,7 @@ typedef struct sg_bake_info {
     uint64_t param_hash;    /* as written                               */
     uint32_t section_count; /* sections in the file                     */
     uint64_t file_size;     /* bytes                                    */
+    sg_bake_kind kind;      /* as opened (the magic matched it)         */
 } sg_bake_info;
 
 /* One validated table entry. */
@@ -229,6 +245,21 @@ typedef struct sg_bake_section {
 sg_status sg_bake_file_open(const char *path, uint64_t scene_hash, uint64_t param_hash,
                             sg_bake_file **out, sg_error *err);
 
+/* How sg_bake_file_open_desc opens a file; zero = a bake, no hash checks,
+ * no map. */
+typedef struct sg_bake_open_desc {
+    sg_bake_kind kind;   /* the magic expected; default SG_BAKE_KIND_BAKE */
+    uint64_t scene_hash; /* 0 skips the check (as sg_bake_file_open)      */
+    uint64_t param_hash; /* 0 skips the check                             */
+    int map;             /* 1: map the whole file read-only at open (or,
+                            where mmap fails, read it into memory) for
+                            sg_bake_file_view; the mapping lives until
+                            close. SG_ERR_NOMEM if neither works.       */
+} sg_bake_open_desc;
+
+/* sg_bake_file_open with a kind and an optional map. */
+sg_status sg_bake_file_open_desc(const char *path, const sg_bake_open_desc *d, sg_bake_file **out, sg_error *err);
+
 /* Header fields; never NULL. */
 const sg_bake_info *sg_bake_file_info(const sg_bake_file *f);
 
@@ -248,7 +279,21 @@ const sg_bake_section *sg_bake_file_find(const sg_bake_file *f, const char *tag)
 sg_status sg_bake_file_read(const sg_bake_file *f, const char *tag, void *dst, uint64_t dst_size,
                             sg_error *err);
 
-/* Closes the file; NULL is a no-op. */
+/* The payload of section tag in place, after checking its CRC as
+ * sg_bake_file_read does: *data points into the map (64-byte aligned: the
+ * map starts on a page) and stays valid until sg_bake_file_close; the
+ * bytes are read-only. Only for a file opened with .map = 1 (else
+ * SG_ERR_INVALID_ARG). A mapped file cut short in place (not replaced by
+ * rename, as our writers do) would fault on access: a view first checks
+ * that the file still has its size. *data only on SG_OK. */
+sg_status sg_bake_file_view(const sg_bake_file *f, const char *tag, const void **data, sg_error *err);
+
+/* 1 if the file at path begins with the magic of kind (a file of that
+ * kind, maybe damaged past its first 8 bytes); 0 if it does not, cannot
+ * be read, or is missing. Reads 8 bytes, checks nothing else. */
+int sg_bake_file_has_magic(const char *path, sg_bake_kind kind);
+
+/* Closes the file (and unmaps it); NULL is a no-op. */
 void sg_bake_file_close(sg_bake_file *f);
 
 #endif

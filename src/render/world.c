@@ -21,15 +21,8 @@
 #include "points/primitives.h"
 #include "points/room.h"
 #include "render/default_scene.h"
+#include "render/world_int.h"
 
-struct sg_world {
-    size_t count;            /* models                              */
-    sg_scene **scenes;       /* one kd-tree per model (invariant 1) */
-    sg_material *materials;  /* one material per model             */
-    sg_envmap *env;
-    sg_aabb bounds;
-    sg_aabb *model_bounds;   /* each model's support box, for culling    */
-};
 
 static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_pointset *out,
                                    sg_model_points_report *report, sg_error *err)
@@ -149,7 +142,7 @@ static void transform_points(const sg_scene_transform *t, sg_pointset *ps)
     }
 }
 
-static sg_status make_envmap(const sg_scene_env *e, sg_envmap **out, sg_error *err)
+sg_status sg_world__make_envmap(const sg_scene_env *e, sg_envmap **out, sg_error *err)
 {
     sg_envmap_desc d = {.rotation_deg = e->rotation_deg, .intensity = e->intensity};
     sg_image img = {0};
@@ -179,12 +172,7 @@ static sg_status make_envmap(const sg_scene_env *e, sg_envmap **out, sg_error *e
 
 /* ---- progress and notes (sg_world_desc) --------------------------------- */
 
-static void say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-static void say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ...)
+void sg_world__say(const sg_world_desc *d, sg_world_event kind, const char *fmt, ...)
 {
     if (!d || !d->on_event)
         return;
@@ -211,15 +199,15 @@ static void note_points(const sg_world_desc *d, size_t i, const sg_scene_model *
                         size_t splats)
 {
     if (r->faces_repeated || r->faces_turned)
-        say(d, SG_WORLD_NOTE,
+        sg_world__say(d, SG_WORLD_NOTE,
             "$.models[%zu] (%s): of %zu triangles, %zu repeat an earlier one (left out) and %zu were wound against "
             "their neighbours (turned)", i, model_label(m), r->file_triangles, r->faces_repeated, r->faces_turned);
     if (r->dropped)
-        say(d, SG_WORLD_NOTE,
+        sg_world__say(d, SG_WORLD_NOTE,
             "$.models[%zu] (%s): dropped %zu stray points whose radius was over %g x the median spacing",
             i, model_label(m), r->dropped, (double)m->points.radius_cap);
     if (r->capped)
-        say(d, SG_WORLD_NOTE,
+        sg_world__say(d, SG_WORLD_NOTE,
             "$.models[%zu] (%s): %zu of %zu splat radii were over %g x the median (%.4g) and were capped to %.4g "
             "(stray points; \"drop_outliers\": true removes them)",
             i, model_label(m), r->capped, splats,
@@ -227,13 +215,21 @@ static void note_points(const sg_world_desc *d, size_t i, const sg_scene_model *
             (double)r->median_radius, (double)r->cap_radius);
 }
 
-static void note_envmap(const sg_world_desc *d, const sg_scene_env *e, const sg_envmap *env)
+void sg_world__note_envmap(const sg_world_desc *d, const sg_scene_env *e, const sg_envmap *env)
 {
     sg_envmap_info info;
     sg_envmap_get_info(env, &info);
     if (info.nonfinite_texels)
-        say(d, SG_WORLD_NOTE, "%s: %zu of %d x %d texels held NaN or infinite values and were set to 0",
+        sg_world__say(d, SG_WORLD_NOTE, "%s: %zu of %d x %d texels held NaN or infinite values and were set to 0",
             e->path ? e->path : "envmap", info.nonfinite_texels, info.width, info.height);
+}
+
+void sg_world__add_bounds(sg_world *w, size_t i)
+{
+    sg_scene_info info;
+    sg_scene_get_info(w->scenes[i], &info);
+    w->bounds = sg_aabb_union(w->bounds, info.bounds);
+    w->model_bounds[i] = info.bounds;
 }
 
 sg_status sg_world_create(const sg_scene_file *sf, sg_world **out, sg_error *err)
@@ -263,15 +259,12 @@ sg_status sg_world_create_desc(const sg_scene_file *sf, const sg_world_desc *d, 
         if ((st = make_model_scene(sf, i, d, &w->scenes[i], err)) != SG_OK)
             goto fail;
         w->materials[i] = m->material;
-        sg_scene_info info;
-        sg_scene_get_info(w->scenes[i], &info);
-        w->bounds = sg_aabb_union(w->bounds, info.bounds);
-        w->model_bounds[i] = info.bounds;
+        sg_world__add_bounds(w, i);
     }
-    say(d, SG_WORLD_STAGE, "environment map%s%s", sf->env.path ? " " : "", sf->env.path ? sf->env.path : "");
-    if ((st = make_envmap(&sf->env, &w->env, err)) != SG_OK)
+    sg_world__say(d, SG_WORLD_STAGE, "environment map%s%s", sf->env.path ? " " : "", sf->env.path ? sf->env.path : "");
+    if ((st = sg_world__make_envmap(&sf->env, &w->env, err)) != SG_OK)
         goto fail;
-    note_envmap(d, &sf->env, w->env);
+    sg_world__note_envmap(d, &sf->env, w->env);
     *out = w;
     return SG_OK;
 fail:
@@ -286,11 +279,11 @@ static sg_status make_model_scene(const sg_scene_file *sf, size_t i, const sg_wo
     sg_status st;
     if (m->surface.model == SG_SURFACE_HYBRID) {
         sg_mesh mesh = {0};
-        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): reading triangles", i + 1, sf->model_count, model_label(m));
+        sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): reading triangles", i + 1, sf->model_count, model_label(m));
         if ((st = load_model_mesh(m, i, &mesh, err)) != SG_OK)
             return st;
         transform_mesh(&m->transform, &mesh);
-        say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the hybrid hierarchy of %zu triangles", i + 1,
+        sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the hybrid hierarchy of %zu triangles", i + 1,
             sf->model_count, model_label(m), mesh.triangle_count);
         st = sg_scene_create_mesh(&m->surface, &mesh, m->kind == SG_SCENE_MODEL_FILE ? m->path : model_label(m),
                                   out, err);
@@ -299,12 +292,12 @@ static sg_status make_model_scene(const sg_scene_file *sf, size_t i, const sg_wo
     }
     sg_pointset ps = {0};
     sg_model_points_report rep = {0};
-    say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): making splats", i + 1, sf->model_count, model_label(m));
+    sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): making splats", i + 1, sf->model_count, model_label(m));
     if ((st = load_model_points(m, i, &ps, &rep, err)) != SG_OK)
         return st;
     note_points(d, i, m, &rep, ps.count);
     transform_points(&m->transform, &ps);
-    say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1, sf->model_count,
+    sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the %s surface of %zu splats", i + 1, sf->model_count,
         model_label(m),
         m->surface.model == SG_SURFACE_DISK ? "disk" : m->surface.model == SG_SURFACE_ISO ? "ISO" : "MLS", ps.count);
     st = sg_scene_create(&m->surface, &ps, out, err);
@@ -322,6 +315,7 @@ void sg_world_destroy(sg_world *w)
     sg_free(w->materials);
     sg_free(w->model_bounds);
     sg_envmap_destroy(w->env);
+    sg_bake_file_close(w->file); /* after the scenes that borrow its map */
     sg_free(w);
 }
 

@@ -60,6 +60,10 @@ void sg_iso_destroy(sg_iso *iso)
 {
     if (!iso)
         return;
+    if (iso->borrowed) {
+        sg_free(iso);
+        return;
+    }
     sg_free(iso->nodes);
     sg_free(iso->leaves);
     sg_free(iso->cf);

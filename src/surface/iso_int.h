@@ -89,6 +89,8 @@ struct sg_iso {
     uint32_t *cn;
     float lod_px;        /* level-of-detail threshold in pixels; 0: off      */
     sg_iso_info info;    /* filled at the end of the build                   */
+    int borrowed;        /* 1: nodes, leaves, cf, cn belong to a world file's
+                            map (scene_store.c); destroy frees the struct only */
 };
 
 static inline float iso_coord(float lo, float unit, uint32_t i) { return lo + (float)i * unit; }

@@ -29,6 +29,7 @@
 #include "surface/iso.h"
 #include "surface/iso_sites.h"
 #include "surface/mls.h"
+#include "surface/scene_int.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
@@ -40,20 +41,6 @@
 
 enum { STACK_SIZE = 128 };
 
-struct sg_scene {
-    sg_scene_desc desc;   /* with defaults filled in                        */
-    sg_pointset points;   /* own copy of the input                          */
-    sg_sites sites;       /* the light sites: a view of the splats          */
-    sg_iso *iso;          /* SG_SURFACE_ISO: the octree (no kd-tree then)   */
-    sg_iso_sites iso_sites; /* ...and its corners as light sites            */
-    sg_hybrid *hybrid;    /* SG_SURFACE_HYBRID: the sphere hierarchy (no
-                             kd-tree, no points)                          */
-    sg_hybrid_sites hybrid_sites; /* ...its vertices and nodes as sites     */
-    sg_kdtree tree;
-    sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
-    sg_mls_params mls;
-    sg_scene_info info;
-};
 
 static sg_scene_desc with_defaults(const sg_scene_desc *d)
 {
@@ -421,6 +408,12 @@ void sg_scene_destroy(sg_scene *sc)
         return;
     sg_hybrid_sites_free(&sc->hybrid_sites);
     sg_hybrid_destroy(sc->hybrid);
+    if (sc->borrowed) { /* the arrays belong to a world file's map */
+        sg_iso_sites_free(&sc->iso_sites);
+        sg_iso_destroy(sc->iso);
+        sg_free(sc);
+        return;
+    }
     sg_pointset_free(&sc->points);
     sg_iso_sites_free(&sc->iso_sites);
     sg_iso_destroy(sc->iso);

@@ -33,6 +33,11 @@
  *                                   is SG_ERR_IO; temporary removed, old file
  *                                   untouched, later calls refused.
  * 15. bake_file::read_misuse        wrong buffer size, bad tag.
+ * 16. bake_file::kinds_and_views    a world-kind file has its own magic; each
+ *                                   kind opened as the other is refused by
+ *                                   name; views of a mapped file are the
+ *                                   payloads, 64-aligned, CRC-checked (a
+ *                                   damaged one refused); no view unmapped.
  */
 #include "test_support.h"
 
@@ -798,9 +803,74 @@ static void test_bake_file_read_misuse(void **state)
     sg_bake_file_close(f);
 }
 
+static void test_bake_file_kinds_and_views(void **state)
+{
+    (void)state;
+    const char *path = tmp_path("kind.sgworld");
+    sg_error err = {0};
+    sg_bake_writer *w = NULL;
+    sg_bake_writer_desc wd = {.path = path, .scene_hash = SCENE_HASH, .param_hash = PARAM_HASH,
+                              .kind = SG_BAKE_KIND_WORLD};
+    const float pnts[6] = {1, 2, 3, 4, 5, 6};
+    const uint32_t ids[3] = {7, 8, 9};
+    expect_ok(sg_bake_writer_create(&wd, &w, &err), &err, "create");
+    expect_ok(sg_bake_writer_add_section(w, "PNTS", SG_BAKE_TYPE_F32, 6, pnts, &err), &err, "PNTS");
+    expect_ok(sg_bake_writer_add_section(w, "IDS_", SG_BAKE_TYPE_U32, 3, ids, &err), &err, "IDS_");
+    expect_ok(sg_bake_writer_commit(w, &err), &err, "commit");
+    sg_bake_writer_destroy(w);
+    size_t n;
+    unsigned char *bytes = slurp(path, &n);
+    assert_memory_equal(bytes, "SGWRLD\0\n", 8);
+
+    /* as a bake: refused by name; as a world: opens */
+    sg_bake_file *f = NULL;
+    open_fails(path, SCENE_HASH, PARAM_HASH, SG_ERR_INVALID_ARG, "a splatgi world file, not a bake file",
+               "world as bake");
+    sg_bake_open_desc od = {.kind = SG_BAKE_KIND_WORLD, .scene_hash = SCENE_HASH, .param_hash = PARAM_HASH};
+    expect_ok(sg_bake_file_open_desc(path, &od, &f, &err), &err, "open world");
+    assert_int_equal(sg_bake_file_info(f)->kind, SG_BAKE_KIND_WORLD);
+    const void *v = NULL;
+    expect_status(sg_bake_file_view(f, "PNTS", &v, &err), &err, SG_ERR_INVALID_ARG, "opened without .map",
+                  "view unmapped");
+    assert_null(v);
+    sg_bake_file_close(f);
+    od.map = 1;
+    expect_ok(sg_bake_file_open_desc(path, &od, &f, &err), &err, "open mapped");
+    expect_ok(sg_bake_file_view(f, "PNTS", &v, &err), &err, "view PNTS");
+    assert_int_equal((uintptr_t)v % SG_BAKE_ALIGN, 0);
+    assert_memory_equal(v, pnts, sizeof pnts);
+    expect_ok(sg_bake_file_view(f, "IDS_", &v, &err), &err, "view IDS_");
+    assert_memory_equal(v, ids, sizeof ids);
+    expect_status(sg_bake_file_view(f, "NONE", &v, &err), &err, SG_ERR_CORRUPT, "no section NONE", "missing");
+    sg_bake_file_close(f);
+
+    /* a bake opened as a world: refused by name */
+    const char *bake = write_small("kind.sgbake", 0);
+    sg_bake_open_desc ob = {.kind = SG_BAKE_KIND_WORLD};
+    expect_status(sg_bake_file_open_desc(bake, &ob, &f, &err), &err, SG_ERR_INVALID_ARG,
+                  "a splatgi bake file, not a world file", "bake as world");
+
+    /* a damaged payload: the view's CRC check refuses it */
+    const sg_bake_section *s = NULL;
+    expect_ok(sg_bake_file_open_desc(path, &od, &f, &err), &err, "open for offsets");
+    s = sg_bake_file_find(f, "IDS_");
+    assert_non_null(s);
+    size_t at = (size_t)s->offset + 5;
+    sg_bake_file_close(f);
+    bytes[at] ^= 0x40;
+    spit(path, bytes, n);
+    expect_ok(sg_bake_file_open_desc(path, &od, &f, &err), &err, "open damaged (payloads unread)");
+    expect_ok(sg_bake_file_view(f, "PNTS", &v, &err), &err, "the other section");
+    expect_status(sg_bake_file_view(f, "IDS_", &v, &err), &err, SG_ERR_CORRUPT, "section IDS_: checksum mismatch",
+                  "damaged view");
+    sg_bake_file_close(f);
+    free(bytes);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bake_file_kinds_and_views),
         cmocka_unit_test(test_bake_file_roundtrip),
         cmocka_unit_test(test_bake_file_zero_sections),
         cmocka_unit_test(test_bake_file_large_section),

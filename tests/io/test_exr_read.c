@@ -287,20 +287,7 @@ static void read_fails(const char *path, const char *name, sg_status want1, sg_s
         fail_msg("%s: *out or *info written on failure", name);
 }
 
-static void *slurp(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    void *buf = malloc((size_t)n);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    fclose(f);
-    *size = (size_t)n;
-    return buf;
-}
+static void *slurp(const char *path, size_t *size) { return sg_test_read_file(path, size); }
 
 static void test_exr_read_truncated_and_corrupt(void **state)
 {

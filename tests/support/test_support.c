@@ -31,6 +31,21 @@ const char *sg_test_write_file(const char *name, const void *data, size_t size)
     return path;
 }
 
+void *sg_test_read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    void *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    *size = (size_t)n;
+    return buf;
+}
+
 const char *sg_test_shared_data(const char *relpath)
 {
     static char path[1024];

@@ -16,6 +16,10 @@
  * same name). Fails the test on I/O errors. */
 const char *sg_test_write_file(const char *name, const void *data, size_t size);
 
+/* The whole file at path in a malloc'd buffer (free it), its length in
+ * *size. Fails the test on I/O errors. */
+void *sg_test_read_file(const char *path, size_t *size);
+
 /* Path of a fresh, empty temporary folder for this test binary. */
 const char *sg_test_tmpdir(void);
 
