@@ -61,3 +61,24 @@ void embree_device_close(embree_device *d)
     d->scene = NULL;
     d->device = NULL;
 }
+
+void embree_device_intersect1(const embree_device *d, const sg_ray *r, struct RTCRayHit *rh)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rh->ray.org_x = r->org.x;
+    rh->ray.org_y = r->org.y;
+    rh->ray.org_z = r->org.z;
+    rh->ray.tnear = r->tmin;
+    rh->ray.dir_x = r->dir.x;
+    rh->ray.dir_y = r->dir.y;
+    rh->ray.dir_z = r->dir.z;
+    rh->ray.time = 0.0f;
+    rh->ray.tfar = r->tmax;
+    rh->ray.mask = 0xFFFFFFFFu;
+    rh->ray.id = 0;
+    rh->ray.flags = 0;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(d->scene, &ctx, rh);
+}

@@ -20,6 +20,7 @@
 #include <stddef.h>
 
 #include "core/error.h"
+#include "math/ray.h"
 
 typedef struct embree_device {
     RTCDevice device;                 /* owns the scene                     */
@@ -37,6 +38,10 @@ int embree_device_open(embree_device *d, int threads);
 /* Attaches g (released here, in every case), commits the scene at
  * `quality` and records build_seconds and memory_bytes; 0 on failure. */
 int embree_device_commit(embree_device *d, RTCGeometry g, enum RTCBuildQuality quality);
+
+/* Traces ray r (tmin..tmax) through the scene, nearest hit into *rh
+ * (rh->hit.geomID RTC_INVALID_GEOMETRY_ID on a miss). */
+void embree_device_intersect1(const embree_device *d, const sg_ray *r, struct RTCRayHit *rh);
 
 /* Releases the scene and the device; a zeroed or failed d is fine. */
 void embree_device_close(embree_device *d);

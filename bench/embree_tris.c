@@ -102,24 +102,8 @@ static double cpu_now(void)
 /* One pixel: invariant 2. */
 static int pixel(const embree_tris *e, const sg_ray *r, float *rgb, uint32_t *id, float *t)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
-    rh.ray.org_x = r->org.x;
-    rh.ray.org_y = r->org.y;
-    rh.ray.org_z = r->org.z;
-    rh.ray.tnear = r->tmin;
-    rh.ray.dir_x = r->dir.x;
-    rh.ray.dir_y = r->dir.y;
-    rh.ray.dir_z = r->dir.z;
-    rh.ray.time = 0.0f;
-    rh.ray.tfar = r->tmax;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(e->dev.scene, &ctx, &rh);
+    embree_device_intersect1(&e->dev, r, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         rgb[0] = 0.1f;
         rgb[1] = 0.1f;
