@@ -275,6 +275,16 @@ static double per_ray(uint64_t v, uint64_t rays) { return rays ? (double)v / (do
 
 /* ---- SURFACES ------------------------------------------------------------ */
 
+/* Whether configuration i is the first of its surface model (its
+ * defaults: radius x 1, no options), which also meets its own reference. */
+static int own_reference_wanted(const surf_cfg *cfgs, int i)
+{
+    for (int j = 0; j < i; j++)
+        if (cfgs[j].model == cfgs[i].model)
+            return 0;
+    return cfgs[i].radius_scale == 1.0f && cfgs[i].iso_tolerance == 0.0f && cfgs[i].kd_disable == 0;
+}
+
 static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_error *err)
 {
     /* The first is the yardstick (reference and direct frame) of the rest. */
@@ -342,19 +352,37 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
                 st = sg_verify__compare(c, &dr.img, &direct_ref, name, &md, err);
             }
         }
+        /* The first configuration of each other model also meets the
+         * reference of its own surface: the bake's error apart from the
+         * surface's difference from MLS (the same light on the same
+         * geometry as the camera sees it). */
+        sg_image_metrics mo = {0};
+        double own_noise = 0;
+        int own = 0;
+        if (st == SG_OK && i > 0 && own_reference_wanted(cfgs, i)) {
+            sg_ref_result oref = {0};
+            st = reference(c, p, w, &sf, &ms->cam, &oref, &own_noise, err);
+            if (st == SG_OK) {
+                snprintf(name, sizeof name, "surfaces_%s_%s_bake_own%s", ms->name, cfg->name, c->d.ci ? "_ci" : "");
+                st = sg_verify__compare(c, &br.img, &oref.mean, name, &mo, err);
+                own = st == SG_OK;
+            }
+            sg_ref_result_free(&oref);
+        }
         if (st == SG_OK) {
             const sg_ray_stats *rs = &dr.st;
-            for (int k = 0; k < 2; k++) {
-                const sg_image_metrics *m = k == 0 ? &mb : &md;
-                double fs = k == 0 ? br.frame_s : dr.frame_s;
+            for (int k = 0; k < 2 + own; k++) {
+                const sg_image_metrics *m = k == 0 ? &mb : k == 1 ? &md : &mo;
+                double fs = k == 1 ? dr.frame_s : br.frame_s;
                 sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g,%g\n",
                                    cfg->name, sg_verify__model_name(cfg->model), cfg->kd_disable, cfg->spc,
-                                   (double)cfg->radius_scale, splats, k == 0 ? "bake_lookup" : "direct", build_s,
-                                   k == 0 ? br.bake_s : 0.0, fs, fs > 0 ? 1.0 / fs : 0.0, p->frame, m->rel_mse,
+                                   (double)cfg->radius_scale, splats,
+                                   k == 0 ? "bake_lookup" : k == 1 ? "direct" : "bake_own_surface", build_s,
+                                   k == 1 ? 0.0 : br.bake_s, fs, fs > 0 ? 1.0 / fs : 0.0, p->frame, m->rel_mse,
                                    m->energy_ratio_lum, m->p99_rel_error, m->nan_pixels + m->inf_pixels,
                                    per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
                                    per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), mib,
-                                   k == 0 ? noise : 0.0,
+                                   k == 0 ? noise : k == 2 ? own_noise : 0.0,
                                    iso_tolerance(cfg));
                 t.rows++;
             }
@@ -363,6 +391,9 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
                            cfg->name, build_s, br.bake_s, br.frame_s, mb.rel_mse, mb.energy_ratio_lum, dr.frame_s,
                            md.rel_mse, per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
                            per_ray(rs->splats, rs->rays));
+            if (own)
+                sg_verify__log(c, "  %-20s bake against its own surface's reference: relMSE %.5f energy %.4f\n",
+                               cfg->name, mo.rel_mse, mo.energy_ratio_lum);
         }
         sg_image_free(&dr.img);
         sg_image_free(&br.img);
