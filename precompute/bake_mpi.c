@@ -40,9 +40,12 @@ static sg_status exchange(void *user, const void *mine, size_t bytes, void **all
     sg_mpi *m = user;
     ++m->exchanges;
     if (m->rank == m->fault_rank && m->exchanges == m->fault_at) {
-        if (m->fault_kill)
+        if (m->fault_kind == SG_MPI_FAULT_KILL)
             raise(SIGKILL);
-        return sg_error_set(err, SG_ERR_IO, "MPI: exchange %ld failed (SPLATGI_MPI_FAULT)", m->exchanges);
+        if (m->fault_kind == SG_MPI_FAULT_INT)
+            raise(SIGINT); /* as Ctrl-C reaching this rank alone; the exchange goes on */
+        else
+            return sg_error_set(err, SG_ERR_IO, "MPI: exchange %ld failed (SPLATGI_MPI_FAULT)", m->exchanges);
     }
     uint64_t own[2] = {bytes, *stop != 0}, *each = sg_alloc_array((size_t)m->size, sizeof own);
     if (!each)
@@ -85,17 +88,18 @@ static sg_status exchange(void *user, const void *mine, size_t bytes, void **all
     return SG_OK;
 }
 
-/* SPLATGI_MPI_FAULT=RANK:N:error|kill (bake_mpi.h). */
+/* SPLATGI_MPI_FAULT=RANK:N:error|kill|int (bake_mpi.h). */
 static int parse_fault(const char *s, sg_mpi *m)
 {
     char kind[16];
     int n = 0;
     if (sscanf(s, "%d:%ld:%15[a-z]%n", &m->fault_rank, &m->fault_at, kind, &n) != 3 || s[n] || m->fault_rank < 0 ||
-        m->fault_at < 1 || (strcmp(kind, "error") && strcmp(kind, "kill"))) {
-        fprintf(stderr, "splatgi-bake: SPLATGI_MPI_FAULT='%s' is not RANK:N:error or RANK:N:kill\n", s);
+        m->fault_at < 1 || (strcmp(kind, "error") && strcmp(kind, "kill") && strcmp(kind, "int"))) {
+        fprintf(stderr, "splatgi-bake: SPLATGI_MPI_FAULT='%s' is not RANK:N:error, RANK:N:kill or RANK:N:int\n", s);
         return 1;
     }
-    m->fault_kill = !strcmp(kind, "kill");
+    m->fault_kind = !strcmp(kind, "kill") ? SG_MPI_FAULT_KILL : !strcmp(kind, "int") ? SG_MPI_FAULT_INT
+                                                                                     : SG_MPI_FAULT_ERROR;
     return 0;
 }
 

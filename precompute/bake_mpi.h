@@ -10,14 +10,18 @@
  * without mpirun never touches MPI.
  *
  * Test hook (bake_mpi.c only): SPLATGI_MPI_FAULT=RANK:N:error makes the
- * N-th exchange (counting from 1) of rank RANK fail with an error, and
+ * N-th exchange (counting from 1) of rank RANK fail with an error;
  * RANK:N:kill makes that rank kill itself with SIGKILL there, as a crashed
- * or killed node would; tests/bake/splatgi_bake_mpi.sh uses both.
+ * or killed node would; RANK:N:int sends that rank alone a SIGINT there (a
+ * Ctrl-C that reached one rank: the others must stop at the same round).
+ * tests/bake/splatgi_bake_mpi.sh uses all three.
  */
 #ifndef SG_PRECOMPUTE_BAKE_MPI_H
 #define SG_PRECOMPUTE_BAKE_MPI_H
 
 #include "bake/bake_comm.h"
+
+enum { SG_MPI_FAULT_ERROR = 0, SG_MPI_FAULT_KILL = 1, SG_MPI_FAULT_INT = 2 };
 
 typedef struct sg_mpi {
     int active;        /* launched by an MPI launcher: MPI started        */
@@ -25,7 +29,7 @@ typedef struct sg_mpi {
     sg_bake_comm comm; /* the exchange (active only)                      */
     int fault_rank;    /* SPLATGI_MPI_FAULT: the rank, -1 none            */
     long fault_at;     /* the exchange that fails (1 = first)              */
-    int fault_kill;    /* kill instead of returning an error               */
+    int fault_kind;    /* SG_MPI_FAULT_*                                    */
     long exchanges;    /* exchanges so far                                 */
     char library[64];  /* "Open MPI v4.1.4", or "none"                      */
 } sg_mpi;

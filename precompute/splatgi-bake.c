@@ -83,6 +83,12 @@ static volatile sig_atomic_t interrupted = 0;
 static void on_sigint(int sig)
 {
     (void)sig;
+    /* Said at once (write(2) is async-signal-safe): under mpirun the ranks
+     * may be killed before the checkpoint, and this line is then the
+     * job's last word. Ranks other than 0 have stderr silenced. */
+    static const char msg[] = "\nsplatgi-bake: interrupted: stopping after this block of work\n";
+    if (!interrupted && write(STDERR_FILENO, msg, sizeof msg - 1) < 0)
+        interrupted = 1; /* nothing to do about a failed write */
     interrupted = 1;
 }
 

@@ -48,7 +48,14 @@ enum {
     /* Distributed rounds (bake_comm.h), per rank: enough work that an
      * exchange (a few MB at most) costs little next to it, little enough
      * that a cancel is seen within a second or so. */
-    DIST_SITES = 512,          /* sample points' sites per rank and round   */
+    DIST_SITES = 512,          /* sample points' sites per rank and round,
+                                  at most                                    */
+    DIST_SITE_RAYS = 1 << 19,  /* rays per rank and round, at most (well
+                                  under a second): many rays per site mean
+                                  fewer sites per round, so that a Ctrl-C
+                                  under mpirun, which kills the ranks a
+                                  second after asking (docs/mpi.md), still
+                                  finds them at a round's end              */
     DIST_GLOSSY = 4 * GLOSSY_CHUNK /* glossy sample points per rank and round */
 };
 
@@ -347,18 +354,27 @@ static int report(runner *r, size_t done, size_t total, int force)
 
 static int on_photons(void *user, size_t done, size_t total) { return report(user, done, total, 0); }
 
-static int on_sites(void *user, size_t done, size_t total)
+static int sites_progress(runner *r, int force)
 {
-    runner *r = user;
-    (void)total;
     size_t all = 0, traced = 0;
     for (size_t m = 0; m < r->j->models; ++m) {
         all += r->j->mw[m].set.count;
         traced += r->j->mw[m].sites.count;
     }
-    (void)done;
-    return report(r, traced, all, 0);
+    return report(r, traced, all, force);
 }
+
+static int on_sites(void *user, size_t done, size_t total)
+{
+    (void)done;
+    (void)total;
+    return sites_progress(user, 0);
+}
+
+/* Distributed rounds ask before every exchange (a round is a fraction of
+ * a second of work or more), so a Ctrl-C is agreed on at the next round;
+ * the program's display keeps its own pace. */
+static void sites_report(runner *r) { sites_progress(r, 1); }
 
 /* ---- distributed rounds (bake_comm.h) ----------------------------------------- */
 
@@ -409,7 +425,7 @@ static sg_status photons_dist(runner *r, const sg_photon_desc *pd, size_t nblock
         if (st == SG_OK)
             st = sg_photon_map_pack(&piece, j->pm.blocks + lo, &buf, &bytes, err);
         sg_photon_map_free(&piece);
-        report(r, j->pm.shot, pd->count, 0);
+        report(r, j->pm.shot, pd->count, 1);
         if (st == SG_OK)
             st = exchange(r, buf, bytes, &all, &all_bytes, err);
         for (int k = 0; k < c->size && st == SG_OK; ++k) {
@@ -441,7 +457,9 @@ static sg_status sites_dist(runner *r, uint32_t m, const sg_transport_desc *td, 
     sg_transport_desc t = *td;
     t.progress = NULL; /* rounds are the unit of progress and cancel */
     while (x->sites.count < x->set.count) {
-        size_t base = x->sites.count, left = x->set.count - base, per = (size_t)DIST_SITES * (size_t)c->size;
+        size_t rays = 2 * ((size_t)td->env_rays + (size_t)td->cos_rays), each = DIST_SITE_RAYS / (rays ? rays : 1);
+        each = each < 16 ? 16 : each > DIST_SITES ? DIST_SITES : each;
+        size_t base = x->sites.count, left = x->set.count - base, per = each * (size_t)c->size;
         size_t lo, hi;
         sg_bake_comm_share(left < per ? left : per, c->size, c->rank, &lo, &hi);
         sg_sample_set share = {.count = hi - lo, .capacity = hi - lo, .splat = x->set.splat + base + lo,
@@ -453,7 +471,7 @@ static sg_status sites_dist(runner *r, uint32_t m, const sg_transport_desc *td, 
         if (st == SG_OK)
             st = sg_site_data_pack(&mine, &buf, &bytes, err);
         sg_site_data_free(&mine);
-        on_sites(r, 0, 0);
+        sites_report(r);
         if (st == SG_OK)
             st = exchange(r, buf, bytes, &all, &all_bytes, err);
         for (int k = 0; k < c->size && st == SG_OK; ++k) {
@@ -497,7 +515,7 @@ static sg_status glossy_dist(runner *r, uint32_t m, const uint32_t *splat, int r
             st = sg_glossy_bake(j->w, j->b, m, splat + base + s, n, x->key_base, res, j->d.glossy_rays,
                                 j->d.photons.seed ^ 0x6105ull, j->d.gather.threads, mine + (s - lo) * stride, err);
         }
-        report(r, *done, total, 0);
+        report(r, *done, total, 1);
         if (st != SG_OK) {
             sg_free(mine);
             return st;
