@@ -47,6 +47,7 @@ static sg_status exchange(void *user, const void *mine, size_t bytes, void **all
         else
             return sg_error_set(err, SG_ERR_IO, "MPI: exchange %ld failed (SPLATGI_MPI_FAULT)", m->exchanges);
     }
+    double t0 = MPI_Wtime();
     uint64_t own[2] = {bytes, *stop != 0}, *each = sg_alloc_array((size_t)m->size, sizeof own);
     if (!each)
         return sg_error_set(err, SG_ERR_NOMEM, "MPI: out of memory");
@@ -85,6 +86,9 @@ static sg_status exchange(void *user, const void *mine, size_t bytes, void **all
     *all = buf;
     *all_bytes = total;
     *stop = any_stop;
+    m->sent += (double)bytes;
+    m->received += (double)(total - bytes);
+    m->seconds += MPI_Wtime() - t0;
     return SG_OK;
 }
 

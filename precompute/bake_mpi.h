@@ -31,6 +31,8 @@ typedef struct sg_mpi {
     long fault_at;     /* the exchange that fails (1 = first)              */
     int fault_kind;    /* SG_MPI_FAULT_*                                    */
     long exchanges;    /* exchanges so far                                 */
+    double sent, received; /* bytes of this rank's pieces, of all pieces   */
+    double seconds;    /* wall time inside exchanges (waiting included)     */
     char library[64];  /* "Open MPI v4.1.4", or "none"                      */
 } sg_mpi;
 

@@ -591,6 +591,15 @@ static int bake_main(int argc, char **argv, sg_mpi *mpi)
     if (bs.glossy_points)
         printf("  %-18s %zu sample points, %d rays each, %.2f s\n", "glossy bins", bs.glossy_points,
                d.glossy_rays, bs.glossy_seconds);
+    if (mpi->active)
+        printf("  %-18s %d ranks; not divided: %.2f s (thinning, refinement, solves, interpolation%s); "
+               "%ld exchanges, rank 0 sent %.2f MiB and received %.2f MiB in %.2f s\n",
+               "distributed", mpi->size, bs.shared_seconds,
+               d.indirect == SG_BAKE_INDIRECT_PHOTONS ? ", photon density" : "", mpi->exchanges, mib((size_t)mpi->sent),
+               mib((size_t)mpi->received), mpi->seconds);
+    else
+        printf("  %-18s %.2f s (thinning, refinement, solves, interpolation: what ranks would repeat)\n",
+               "not divisible", bs.shared_seconds);
     printf("  %-18s %.2f s\n", "write", t_write);
     printf("  %-18s %.2f s (world %.2f s, bake %.2f s in this run)\n", "total", omp_get_wtime() - t_start, t_world,
            t_run);

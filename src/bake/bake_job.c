@@ -558,9 +558,11 @@ static sg_status run_photons(runner *r, sg_error *err)
     }
     report(r, j->pm.shot, pd.count, 1);
     float **E = NULL;
+    double t0 = omp_get_wtime();
     sg_status st = sg_irradiance_gather(j->w, &j->pm, &j->d.gather, &E, err);
     if (st != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     for (size_t m = 0; m < j->models; ++m) { /* the photons' E per side is indirect light */
         float *L = sg_bake__light(j->b, (uint32_t)m);
         size_t n = j->mw[m].ps->count;
@@ -593,8 +595,10 @@ static sg_status run_sites(runner *r, sg_error *err)
         j->stage = SG_BAKE_STAGE_GLOSSY;
         return j->prepared ? SG_OK : first_samples(j, err);
     }
+    double t0 = omp_get_wtime();
     if (!j->prepared && (st = first_samples(j, err)) != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     sg_transport_desc td = {.env_rays = j->d.direct_samples, .cos_rays = j->d.gather_rays,
                             .seed = j->d.photons.seed ^ 0xD1EC7ull, .threads = j->d.gather.threads,
                             .progress = on_sites, .progress_user = r};
@@ -614,16 +618,21 @@ static sg_status run_sites(runner *r, sg_error *err)
         if (r->stop)
             return sg_error_set(err, SG_ERR_CANCELLED, "bake: cancelled after level %d", j->level);
         size_t added = 0;
-        if (j->level >= j->d.refine_levels || (st = refine(j, &added, err)) != SG_OK || added == 0)
+        t0 = omp_get_wtime();
+        int last = j->level >= j->d.refine_levels || (st = refine(j, &added, err)) != SG_OK || added == 0;
+        j->shared_seconds += omp_get_wtime() - t0;
+        if (last)
             break;
         ++j->level;
     }
     if (st != SG_OK)
         return st;
+    t0 = omp_get_wtime();
     if (j->d.indirect == SG_BAKE_INDIRECT_TRANSPORT && (st = solve_indirect(j, err)) != SG_OK)
         return st;
     if ((st = interpolate(j, err)) != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     j->stage = SG_BAKE_STAGE_GLOSSY;
     return SG_OK;
 }
@@ -662,8 +671,10 @@ static sg_status run_glossy(runner *r, sg_error *err)
         uint16_t *bins;
         sg_bake__glossy(j->b, (uint32_t)m, &splat, &nearest, &bins);
         memcpy(splat, x->set.splat, x->set.count * sizeof *splat);
+        double t0 = omp_get_wtime();
         if (!x->nearest && (st = nearest_samples(x, j->d.gather.normal_cos, j->d.gather.threads, err)) != SG_OK)
             return st;
+        j->shared_seconds += omp_get_wtime() - t0;
         memcpy(nearest, x->nearest, x->ps->count * sizeof *nearest);
         size_t stride = 3 * (size_t)res * (size_t)res;
         if (j->distributed && (st = glossy_dist(r, (uint32_t)m, splat, res, stride, bins, &done, total, err)) != SG_OK)
@@ -782,6 +793,7 @@ sg_status sg_bake_job_finish(sg_bake_job *j, sg_bake **out, sg_error *err)
     s->transport_iterations = j->ts.iterations;
     s->direct_seconds = j->seconds[SG_BAKE_STAGE_SITES];
     s->glossy_seconds = j->seconds[SG_BAKE_STAGE_GLOSSY];
+    s->shared_seconds = j->shared_seconds;
     s->gather_seconds = j->seconds[SG_BAKE_STAGE_SITES] + j->seconds[SG_BAKE_STAGE_GLOSSY];
     sg_bake__update_memory(j->b);
     *out = j->b;

@@ -49,6 +49,8 @@ struct sg_bake_job {
     int prepared;            /* SITES: level-0 samples and e0 made           */
     sg_transport_stats ts;   /* of the last solve                            */
     double seconds[3];       /* wall time per stage, this process            */
+    double shared_seconds;   /* of which the work not divided among ranks
+                                (bake_comm.h), this process                 */
     sg_bake_comm comm;       /* the ranks sharing the work (bake_comm.h)     */
     int distributed;         /* comm was set: work in rounds over the ranks   */
 };
