@@ -9,7 +9,8 @@
 #     bake is compared; every .sgbake is cmp'd with the plain one. Wall
 #     time of the bake ("bake X s in this run" of splatgi-bake's report),
 #     of the whole command, and the peak RSS of each process
-#     (/usr/bin/time -v).
+#     (/usr/bin/time -v); then the photon estimator (1M photons) plainly
+#     and on 2 ranks.
 #   bench/bench_mpi.sh memory [--sizes 250000,1000000,4000000] [...]
 #     peak RSS of a plain splatgi-bake (world built in the process, then
 #     the default transport bake, 2 threads) at each size, to extrapolate
@@ -92,7 +93,10 @@ run() { # label ranks threads command...
   "$@" > "$work/$label.log" 2> "$work/$label.err" || { cat "$work/$label.log" "$work/$label.err"; exit 1; }
   t1=$(now)
   local same=reference
-  [ "$label" = plain ] || { cmp -s "$work/plain.sgbake" "$work/$label.sgbake" && same=yes || same=NO; }
+  case "$label" in
+    plain*) ;;
+    *) cmp -s "$work/plain.sgbake" "$work/$label.sgbake" && same=yes || same=NO ;;
+  esac
   local splats
   splats=$(sed -n 's/.*, \([0-9]*\) splats, world built.*/\1/p' "$work/$label.log")
   local row="$points,$splats,$label,$ranks,$threads,$(bake_s "$work/$label.log"),$(echo "$t1 - $t0" | bc),$(rss_of "$work/$label.err"),$same,\"$cpu, $(nproc) cores\""
@@ -104,4 +108,10 @@ echo "points,splats,run,ranks,threads,bake_s,wall_s,peak_rss_mib,identical,machi
 run plain 1 2 /usr/bin/time -v "$bake" "${common[@]}" -o "$work/plain.sgbake" --threads 2
 run np1x2 1 2 mpirun -np 1 /usr/bin/time -v "$bake" "${common[@]}" -o "$work/np1x2.sgbake" --threads 2
 run np2x1 2 1 mpirun --oversubscribe -np 2 /usr/bin/time -v "$bake" "${common[@]}" -o "$work/np2x1.sgbake" --threads 1
-grep -h "sample sites\|glossy bins  \|total  " "$work/plain.log" "$work/np2x1.log"
+# The photon estimator: 1M photons in 245 blocks of 4096, divided by blocks.
+pcommon=("${common[@]}" --indirect photons --photons 1000000)
+run plain-photons 1 2 /usr/bin/time -v "$bake" "${pcommon[@]}" -o "$work/plain-photons.sgbake" --threads 2
+cp "$work/plain.sgbake" "$work/plain-transport.sgbake" && cp "$work/plain-photons.sgbake" "$work/plain.sgbake"
+run np2x1-photons 2 1 mpirun --oversubscribe -np 2 /usr/bin/time -v "$bake" "${pcommon[@]}" -o "$work/np2x1-photons.sgbake" --threads 1
+grep -h "photons  " "$work/plain-photons.log" "$work/np2x1-photons.log"
+grep -h "sample sites\|sample points  \|distributed  \|not divisible\|total  " "$work/plain.log" "$work/np2x1.log"
