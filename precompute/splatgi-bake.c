@@ -74,6 +74,8 @@ static const char usage[] =
     "  --help\n"
     "Ctrl-C stops within a block of work and writes OUT.ckpt (exit status 130);\n"
     "a second Ctrl-C quits at once without one. A finished bake removes OUT.ckpt.\n"
+    "Distributed (an MPI build): mpirun -np N splatgi-bake ... divides the bake among\n"
+    "N ranks; rank 0 reports and writes the same file as one process (docs/mpi.md).\n"
     "\n" SG_MODEL_SCENE_OPTIONS;
 
 /* Set by the SIGINT handler, read by the progress callback and between
