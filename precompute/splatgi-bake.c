@@ -6,6 +6,14 @@
  * resumed bake is the same file, byte for byte, as one run straight
  * through. Options, library calls and a report; the algorithms live in
  * src/bake/.
+ *
+ * Under mpirun (bake_mpi.h, docs/mpi.md) every rank loads the same scene
+ * or world file and runs the same job with the ranks' communicator
+ * (bake/bake_comm.h); rank 0 alone prints progress and the report, writes
+ * checkpoints and the .sgbake, which is the same file, byte for byte, as a
+ * plain run's. A rank that fails says so with its rank and ends the whole
+ * job (MPI_Abort) before anything is written; Ctrl-C is agreed on by all
+ * ranks at the next round, so rank 0's checkpoint is the job's state.
  */
 #include <errno.h>
 #include <inttypes.h>
@@ -21,9 +29,11 @@
 #include "app/model_scene.h"
 #include "app/preflight.h"
 #include "bake/bake.h"
+#include "core/alloc.h"
 #include "bake/bake_file.h"
 #include "bake/bake_io.h"
 #include "bake/bake_job.h"
+#include "bake_mpi.h"
 #include "io/scene_file.h"
 #include "program.h"
 #include "render/world.h"
@@ -64,6 +74,8 @@ static const char usage[] =
     "  --help\n"
     "Ctrl-C stops within a block of work and writes OUT.ckpt (exit status 130);\n"
     "a second Ctrl-C quits at once without one. A finished bake removes OUT.ckpt.\n"
+    "Distributed (an MPI build): mpirun -np N splatgi-bake ... divides the bake among\n"
+    "N ranks; rank 0 reports and writes the same file as one process (docs/mpi.md).\n"
     "\n" SG_MODEL_SCENE_OPTIONS;
 
 /* Set by the SIGINT handler, read by the progress callback and between
@@ -73,8 +85,20 @@ static volatile sig_atomic_t interrupted = 0;
 static void on_sigint(int sig)
 {
     (void)sig;
+    /* Said at once (write(2) is async-signal-safe): under mpirun the ranks
+     * may be killed before the checkpoint, and this line is then the
+     * job's last word. Ranks other than 0 have stderr silenced. */
+    static const char msg[] = "\nsplatgi-bake: interrupted: stopping after this block of work\n";
+    if (!interrupted && write(STDERR_FILENO, msg, sizeof msg - 1) < 0)
+        interrupted = 1; /* nothing to do about a failed write */
     interrupted = 1;
 }
+
+/* Where fail() writes, and the rank it names: ranks other than 0 have
+ * stdout and stderr silenced (rank 0 says everything once) and keep a copy
+ * of stderr for their own errors. */
+static FILE *msg_out;
+static int msg_rank = -1; /* -1: not distributed, no rank in messages */
 
 typedef struct options {
     const char *scene, *out;
@@ -94,11 +118,17 @@ typedef struct progress {
     int stage, level;   /* the stage and level the line is about            */
     double last_print;  /* plain mode: when the last line was printed       */
     int drawn;          /* tty mode: a progress line is on screen           */
+    int quiet;          /* a rank other than 0: no display                  */
 } progress;
 
 static int fail(const char *msg)
 {
-    fprintf(stderr, "splatgi-bake: %s\n", msg);
+    FILE *f = msg_out ? msg_out : stderr;
+    if (msg_rank >= 0)
+        fprintf(f, "splatgi-bake: rank %d: %s\n", msg_rank, msg);
+    else
+        fprintf(f, "splatgi-bake: %s\n", msg);
+    fflush(f);
     return 1;
 }
 
@@ -152,6 +182,8 @@ static const char *stage_name(const sg_bake_progress *q, char *buf, size_t size)
 static int on_progress(void *user, const sg_bake_progress *q)
 {
     progress *p = user;
+    if (p->quiet)
+        return interrupted != 0;
     double now = omp_get_wtime();
     if ((int)q->stage != p->stage || q->level != p->level) { /* a new stage: a new line */
         end_progress_line(p);
@@ -291,9 +323,53 @@ static void print_resume_command(int argc, char **argv)
     fprintf(stderr, "%s\n", has_resume ? "" : " --resume");
 }
 
-int main(int argc, char **argv)
+/* Every rank waits here until all arrive (a round with no data). */
+static sg_status barrier(sg_mpi *mpi, int *stop, sg_error *err)
+{
+    void *all = NULL;
+    size_t n = 0;
+    int s = *stop;
+    sg_status st = mpi->comm.exchange(mpi->comm.user, NULL, 0, &all, &n, &s, err);
+    sg_free(all);
+    if (st == SG_OK)
+        *stop = s;
+    return st;
+}
+
+/* The ranks must start the job from the same state (the same parameters,
+ * and on --resume the same checkpoint): each sends its parameter hash,
+ * stage, level and progress, and every rank compares them with rank 0's. */
+static sg_status check_same_job(sg_mpi *mpi, const sg_bake_job *job, sg_error *err)
+{
+    sg_bake_desc jd = sg_bake_job_desc(job);
+    sg_bake_progress p = sg_bake_job_progress(job);
+    uint64_t mine[5] = {sg_bake_param_hash(&jd), (uint64_t)p.stage, (uint64_t)p.level, p.done, p.total};
+    uint64_t *buf = sg_alloc_array(5, sizeof *buf);
+    if (!buf)
+        return sg_error_set(err, SG_ERR_NOMEM, "out of memory");
+    memcpy(buf, mine, sizeof mine);
+    void *all = NULL;
+    size_t n = 0;
+    int stop = 0;
+    sg_status st = mpi->comm.exchange(mpi->comm.user, buf, sizeof mine, &all, &n, &stop, err);
+    sg_free(buf);
+    if (st != SG_OK)
+        return st;
+    if (n != (size_t)mpi->size * sizeof mine)
+        st = sg_error_set(err, SG_ERR_CORRUPT, "the ranks' job states came back with %zu bytes", n);
+    for (int r = 1; r < mpi->size && st == SG_OK; ++r)
+        if (memcmp((const char *)all + (size_t)r * sizeof mine, all, sizeof mine))
+            st = sg_error_set(err, SG_ERR_INVALID_ARG,
+                              "rank %d starts the bake at another point or with other parameters than rank 0 "
+                              "(a different checkpoint or scene?)", r);
+    sg_free(all);
+    return st;
+}
+
+static int bake_main(int argc, char **argv, sg_mpi *mpi)
 {
     options o = {0};
+    int root = mpi->rank == 0; /* writes and reports */
     sg_prog_init("splatgi-bake");
     int pr = parse_args(argc, argv, &o);
     if (pr)
@@ -362,10 +438,28 @@ int main(int argc, char **argv)
             printf("splatgi-bake: %s is stale (%s): baking again\n", o.out, opened ? why : e2.message);
     }
     /* Where the bake goes, and the memory it needs, before the world. */
+    /* --world FILE --if-stale may rewrite FILE: rank 0 alone does, the
+     * others then load what it left. */
+    int world_first = mpi->active && o.world.path && o.world.if_stale;
+    if (world_first && !root) {
+        int stop = 0;
+        if (barrier(mpi, &stop, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
+        o.world.if_stale = 0;
+    }
     if (sg_prog_check_output(o.out, &err) != SG_OK ||
         sg_prog_build_world(o.scene, &sf, sg_photon_map_bytes(2 * d.photons.count), &o.world, &world, &err) != SG_OK) {
         fail(err.message);
         goto done;
+    }
+    if (world_first && root) {
+        int stop = 0;
+        if (barrier(mpi, &stop, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
     }
     double t_world = omp_get_wtime() - t_start;
     size_t splats = 0, glossy = 0, models = sg_world_model_count(world);
@@ -395,8 +489,18 @@ int main(int argc, char **argv)
             goto done;
         }
     }
+    if (mpi->active) {
+        sg_bake_job_set_comm(job, &mpi->comm);
+        if (check_same_job(mpi, job, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
+    }
     int threads = o.threads > 0 ? o.threads : omp_get_max_threads();
     printf("splatgi-bake: %s: %zu models, %zu splats, world built in %.2f s\n", o.scene, models, splats, t_world);
+    if (mpi->active)
+        printf("splatgi-bake: distributed over %d rank%s (%s), %d thread%s each\n", mpi->size,
+               mpi->size == 1 ? "" : "s", mpi->library, threads, threads == 1 ? "" : "s");
     if (d.indirect == SG_BAKE_INDIRECT_PHOTONS)
         printf("splatgi-bake: photon estimator: %zu photons in %zu blocks of %d, k %u; ", d.photons.count,
                sg_photon_block_count(&d.photons), SG_PHOTON_BLOCK, d.gather.k);
@@ -413,7 +517,7 @@ int main(int argc, char **argv)
     fflush(stdout);
 
     progress prog = {.tty = isatty(STDERR_FILENO), .t0 = omp_get_wtime(), .start_done = at.done,
-                     .stage = (int)at.stage, .level = at.level};
+                     .stage = (int)at.stage, .level = at.level, .quiet = !root};
     prog.last_print = prog.t0;
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -421,12 +525,26 @@ int main(int argc, char **argv)
     sa.sa_flags = SA_RESETHAND; /* a second Ctrl-C quits at once */
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, NULL);
+    if (mpi->active) /* mpirun passes Ctrl-C on to the ranks as SIGTERM */
+        sigaction(SIGTERM, &sa, NULL);
 
     double t_run0 = omp_get_wtime();
     sg_status st = sg_bake_job_run(job, on_progress, &prog, &err);
     double t_run = omp_get_wtime() - t_run0;
     end_progress_line(&prog);
-    if (st == SG_ERR_CANCELLED || (st == SG_OK && interrupted)) {
+    int stop = st == SG_ERR_CANCELLED || (st == SG_OK && interrupted);
+    if (mpi->active && (st == SG_OK || st == SG_ERR_CANCELLED)) {
+        /* A Ctrl-C after the job's last round: all ranks decide alike. */
+        if (barrier(mpi, &stop, &err) != SG_OK) {
+            fail(err.message);
+            goto done;
+        }
+    }
+    if (stop && !root) {
+        rc = 130; /* rank 0 writes the checkpoint */
+        goto done;
+    }
+    if (stop) {
         double t0 = omp_get_wtime();
         if (sg_bake_job_save(job, ckpt, scene_hash, &err) != SG_OK) {
             fail(err.message);
@@ -445,6 +563,10 @@ int main(int argc, char **argv)
     }
     if (st != SG_OK || sg_bake_job_finish(job, &bake, &err) != SG_OK) {
         fail(err.message);
+        goto done;
+    }
+    if (!root) { /* rank 0 writes the bake */
+        rc = 0;
         goto done;
     }
     sg_bake_stats bs = {0};
@@ -471,6 +593,15 @@ int main(int argc, char **argv)
     if (bs.glossy_points)
         printf("  %-18s %zu sample points, %d rays each, %.2f s\n", "glossy bins", bs.glossy_points,
                d.glossy_rays, bs.glossy_seconds);
+    if (mpi->active)
+        printf("  %-18s %d ranks; not divided: %.2f s (thinning, refinement, solves, interpolation%s); "
+               "%ld exchanges, rank 0 sent %.2f MiB and received %.2f MiB in %.2f s\n",
+               "distributed", mpi->size, bs.shared_seconds,
+               d.indirect == SG_BAKE_INDIRECT_PHOTONS ? ", photon density" : "", mpi->exchanges, mib((size_t)mpi->sent),
+               mib((size_t)mpi->received), mpi->seconds);
+    else
+        printf("  %-18s %.2f s (thinning, refinement, solves, interpolation: what ranks would repeat)\n",
+               "not divisible", bs.shared_seconds);
     printf("  %-18s %.2f s\n", "write", t_write);
     printf("  %-18s %.2f s (world %.2f s, bake %.2f s in this run)\n", "total", omp_get_wtime() - t_start, t_world,
            t_run);
@@ -504,4 +635,32 @@ done:
     sg_world_destroy(world);
     sg_scene_file_free(&sf);
     return rc;
+}
+
+/* Ranks other than 0 keep quiet: rank 0 says everything once. */
+static void quiet_rank(const sg_mpi *mpi)
+{
+    int fd = dup(STDERR_FILENO);
+    msg_out = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (!freopen("/dev/null", "w", stdout) || (msg_out && !freopen("/dev/null", "w", stderr)))
+        msg_out = NULL; /* keep what works: messages on stderr */
+    (void)mpi;
+}
+
+int main(int argc, char **argv)
+{
+    sg_mpi mpi;
+    if (sg_mpi_start(&argc, &argv, &mpi) != 0)
+        return 1;
+    if (mpi.active && mpi.size > 1) {
+        msg_rank = mpi.rank;
+        if (mpi.rank > 0)
+            quiet_rank(&mpi);
+    }
+    int rc = bake_main(argc, argv, &mpi);
+    /* A failed rank ends them all: the others may be waiting for it in
+     * an exchange. Nothing has been written (rank 0 writes last). */
+    if (mpi.active && rc != 0 && rc != 130)
+        sg_mpi_abort(&mpi, rc);
+    return sg_mpi_finish(&mpi, rc);
 }

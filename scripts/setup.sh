@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # setup.sh — installs the Debian packages splatgi needs (clang and
-# libclang-rt-dev for the fuzzers of scripts/fuzz.sh) and creates
+# libclang-rt-dev for the fuzzers of scripts/fuzz.sh; Open MPI for the
+# distributed bake, docs/mpi.md, optional at build time) and creates
 # assets/bunny.ply. Idempotent: packages already present are skipped by
 # apt-get, and an existing asset is left alone.
 set -euo pipefail
@@ -12,6 +13,7 @@ packages=(
   libopenexr-dev libomp-dev libembree-dev libcjson-dev libglfw3-dev
   libopencolorio-dev libstb-dev gnuplot-nox xvfb xauth libgl-dev blender-data
   clang libclang-rt-dev
+  libopenmpi-dev openmpi-bin
 )
 # node and npm only convert the bunny. A nodejs from another source (e.g.
 # NodeSource) bundles npm and conflicts with Debian's npm package, so ask for

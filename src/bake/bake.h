@@ -106,6 +106,11 @@ typedef struct sg_bake_stats {
     size_t site_hits;          /* rays of the sites that hit a surface      */
     int transport_iterations;  /* sweeps of the transport solve (0: none)   */
     double glossy_seconds;     /* the glossy bins (part of gather_seconds)   */
+    double shared_seconds;     /* the part of trace and gather seconds that a
+                                  distributed bake does not divide among
+                                  ranks (bake_comm.h: sample thinning,
+                                  refinement, solves, interpolation, the
+                                  photon density estimate); 0 when loaded  */
     size_t memory_bytes;       /* all kept: the sum of the three below       */
     size_t irradiance_bytes;   /* the light per splat: SG_BAKE_SPLAT_FLOATS
                                   floats                                   */

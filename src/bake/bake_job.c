@@ -44,7 +44,19 @@ static const float SUPPORT = 2.0f;
 
 enum {
     PHOTON_CHUNK = 16, /* photon blocks per call of sg_photons_trace_more  */
-    GLOSSY_CHUNK = 32  /* glossy sample points per call of sg_glossy_bake  */
+    GLOSSY_CHUNK = 32, /* glossy sample points per call of sg_glossy_bake  */
+    /* Distributed rounds (bake_comm.h), per rank: enough work that an
+     * exchange (a few MB at most) costs little next to it, little enough
+     * that a cancel is seen within a second or so. */
+    DIST_SITES = 512,          /* sample points' sites per rank and round,
+                                  at most                                    */
+    DIST_SITE_RAYS = 1 << 19,  /* rays per rank and round, at most (well
+                                  under a second): many rays per site mean
+                                  fewer sites per round, so that a Ctrl-C
+                                  under mpirun, which kills the ranks a
+                                  second after asking (docs/mpi.md), still
+                                  finds them at a round's end              */
+    DIST_GLOSSY = 4 * GLOSSY_CHUNK /* glossy sample points per rank and round */
 };
 
 /* ---- models ---------------------------------------------------------------- */
@@ -342,17 +354,187 @@ static int report(runner *r, size_t done, size_t total, int force)
 
 static int on_photons(void *user, size_t done, size_t total) { return report(user, done, total, 0); }
 
-static int on_sites(void *user, size_t done, size_t total)
+static int sites_progress(runner *r, int force)
 {
-    runner *r = user;
-    (void)total;
     size_t all = 0, traced = 0;
     for (size_t m = 0; m < r->j->models; ++m) {
         all += r->j->mw[m].set.count;
         traced += r->j->mw[m].sites.count;
     }
+    return report(r, traced, all, force);
+}
+
+static int on_sites(void *user, size_t done, size_t total)
+{
     (void)done;
-    return report(r, traced, all, 0);
+    (void)total;
+    return sites_progress(user, 0);
+}
+
+/* Distributed rounds ask before every exchange (a round is a fraction of
+ * a second of work or more), so a Ctrl-C is agreed on at the next round;
+ * the program's display keeps its own pace. */
+static void sites_report(runner *r) { sites_progress(r, 1); }
+
+/* ---- distributed rounds (bake_comm.h) ----------------------------------------- */
+
+/* Sends this rank's piece (freed here) and receives every rank's, in rank
+ * order; the stop flags are combined into r->stop, so every rank decides
+ * the same. */
+static sg_status exchange(runner *r, void *mine, size_t bytes, void **all, size_t *all_bytes, sg_error *err)
+{
+    const sg_bake_comm *c = &r->j->comm;
+    int stop = r->stop;
+    *all = NULL;
+    *all_bytes = 0;
+    sg_status st = c->exchange(c->user, mine, bytes, all, all_bytes, &stop, err);
+    sg_free(mine);
+    if (st == SG_OK)
+        r->stop = stop;
+    return st;
+}
+
+/* A round with no data: every rank learns whether any asked to stop. */
+static sg_status agree_stop(runner *r, sg_error *err)
+{
+    void *all;
+    size_t n;
+    sg_status st = exchange(r, NULL, 0, &all, &n, err);
+    sg_free(all);
+    return st;
+}
+
+/* The photon pass in rounds: each rank traces its share of the round's
+ * blocks; the pieces, appended in rank order, continue the map exactly as
+ * one process's blocks would (photons.h). */
+static sg_status photons_dist(runner *r, const sg_photon_desc *pd, size_t nblocks, sg_error *err)
+{
+    sg_bake_job *j = r->j;
+    const sg_bake_comm *c = &j->comm;
+    while (j->pm.blocks < nblocks) {
+        double t0 = omp_get_wtime();
+        size_t left = nblocks - j->pm.blocks, per = (size_t)PHOTON_CHUNK * (size_t)c->size;
+        size_t lo, hi;
+        sg_bake_comm_share(left < per ? left : per, c->size, c->rank, &lo, &hi);
+        sg_photon_map piece = {.blocks = j->pm.blocks + hi};
+        void *buf = NULL, *all = NULL;
+        size_t bytes = 0, all_bytes = 0, at = 0;
+        sg_status st = SG_OK;
+        if (hi > lo)
+            st = sg_photons_trace_range(j->w, pd, j->pm.blocks + lo, j->pm.blocks + hi, &piece, err);
+        if (st == SG_OK)
+            st = sg_photon_map_pack(&piece, j->pm.blocks + lo, &buf, &bytes, err);
+        sg_photon_map_free(&piece);
+        report(r, j->pm.shot, pd->count, 1);
+        if (st == SG_OK)
+            st = exchange(r, buf, bytes, &all, &all_bytes, err);
+        for (int k = 0; k < c->size && st == SG_OK; ++k) {
+            size_t used;
+            st = sg_photon_map_append_packed(&j->pm, pd, (const char *)all + at, all_bytes - at, &used, err);
+            at += used;
+        }
+        if (st == SG_OK && at != all_bytes)
+            st = sg_error_set(err, SG_ERR_CORRUPT, "photons: %zu bytes left over after a round", all_bytes - at);
+        sg_free(all);
+        j->pm.seconds += omp_get_wtime() - t0;
+        if (st != SG_OK)
+            return st;
+        if (r->stop)
+            return sg_error_set(err, SG_ERR_CANCELLED, "photons: cancelled after %zu of %zu photons", j->pm.shot,
+                                pd->count);
+    }
+    return SG_OK;
+}
+
+/* The sites of model m's samples [sites.count, set.count) in rounds: each
+ * rank traces its share of the round's samples (their random streams are
+ * keyed by splat, transport.h), the pieces appended in rank order. */
+static sg_status sites_dist(runner *r, uint32_t m, const sg_transport_desc *td, sg_error *err)
+{
+    sg_bake_job *j = r->j;
+    sg_bake_job_model *x = &j->mw[m];
+    const sg_bake_comm *c = &j->comm;
+    sg_transport_desc t = *td;
+    t.progress = NULL; /* rounds are the unit of progress and cancel */
+    while (x->sites.count < x->set.count) {
+        size_t rays = 2 * ((size_t)td->env_rays + (size_t)td->cos_rays), each = DIST_SITE_RAYS / (rays ? rays : 1);
+        each = each < 16 ? 16 : each > DIST_SITES ? DIST_SITES : each;
+        size_t base = x->sites.count, left = x->set.count - base, per = each * (size_t)c->size;
+        size_t lo, hi;
+        sg_bake_comm_share(left < per ? left : per, c->size, c->rank, &lo, &hi);
+        sg_sample_set share = {.count = hi - lo, .capacity = hi - lo, .splat = x->set.splat + base + lo,
+                               .level = x->set.level + base + lo};
+        sg_site_data mine = {0};
+        void *buf = NULL, *all = NULL;
+        size_t bytes = 0, all_bytes = 0, at = 0;
+        sg_status st = sg_transport_gather(j->w, m, &share, x->key_base, &t, &mine, err);
+        if (st == SG_OK)
+            st = sg_site_data_pack(&mine, &buf, &bytes, err);
+        sg_site_data_free(&mine);
+        sites_report(r);
+        if (st == SG_OK)
+            st = exchange(r, buf, bytes, &all, &all_bytes, err);
+        for (int k = 0; k < c->size && st == SG_OK; ++k) {
+            size_t used;
+            st = sg_site_data_append_packed(&x->sites, (const char *)all + at, all_bytes - at, &used, err);
+            at += used;
+        }
+        if (st == SG_OK && (at != all_bytes || x->sites.count != base + (left < per ? left : per)))
+            st = sg_error_set(err, SG_ERR_CORRUPT, "bake: a round of sites of model %u came back with %zu samples",
+                              m, x->sites.count - base);
+        sg_free(all);
+        if (st != SG_OK)
+            return st;
+        if (r->stop)
+            return sg_error_set(err, SG_ERR_CANCELLED, "bake: cancelled after %zu of %zu sample points",
+                                x->sites.count, x->set.count);
+    }
+    return SG_OK;
+}
+
+/* Glossy bins of model m's samples [glossy_done, count) in rounds, into
+ * bins (stride halves per sample), as sites_dist. */
+static sg_status glossy_dist(runner *r, uint32_t m, const uint32_t *splat, int res, size_t stride, uint16_t *bins,
+                             size_t *done, size_t total, sg_error *err)
+{
+    sg_bake_job *j = r->j;
+    sg_bake_job_model *x = &j->mw[m];
+    const sg_bake_comm *c = &j->comm;
+    while (x->glossy_done < x->set.count) {
+        size_t base = x->glossy_done, left = x->set.count - base, per = (size_t)DIST_GLOSSY * (size_t)c->size;
+        size_t round = left < per ? left : per, lo, hi;
+        sg_bake_comm_share(round, c->size, c->rank, &lo, &hi);
+        void *all = NULL;
+        size_t all_bytes = 0;
+        sg_status st = SG_OK;
+        uint16_t *mine = sg_alloc_array((hi - lo) * stride + 1, sizeof *mine);
+        if (!mine)
+            return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu glossy sample points", hi - lo);
+        for (size_t s = lo; s < hi && st == SG_OK; s += GLOSSY_CHUNK) {
+            size_t n = hi - s < GLOSSY_CHUNK ? hi - s : GLOSSY_CHUNK;
+            st = sg_glossy_bake(j->w, j->b, m, splat + base + s, n, x->key_base, res, j->d.glossy_rays,
+                                j->d.photons.seed ^ 0x6105ull, j->d.gather.threads, mine + (s - lo) * stride, err);
+        }
+        report(r, *done, total, 1);
+        if (st != SG_OK) {
+            sg_free(mine);
+            return st;
+        }
+        if ((st = exchange(r, mine, (hi - lo) * stride * sizeof *mine, &all, &all_bytes, err)) != SG_OK)
+            return st;
+        if (all_bytes != round * stride * sizeof *bins) {
+            sg_free(all);
+            return sg_error_set(err, SG_ERR_CORRUPT, "bake: a round of %zu glossy sample points came back with "
+                                "%zu bytes", round, all_bytes);
+        }
+        memcpy(bins + base * stride, all, all_bytes); /* rank order = sample order */
+        sg_free(all);
+        x->glossy_done += round;
+        *done += round;
+        if (r->stop)
+            return sg_error_set(err, SG_ERR_CANCELLED, "bake: cancelled in the glossy bins");
+    }
+    return SG_OK;
 }
 
 static sg_status run_photons(runner *r, sg_error *err)
@@ -363,6 +545,11 @@ static sg_status run_photons(runner *r, sg_error *err)
     pd.progress_user = r;
     pd.progress_seconds = -1.0; /* the runner keeps time */
     size_t nblocks = sg_photon_block_count(&pd);
+    if (j->distributed) {
+        sg_status st = photons_dist(r, &pd, nblocks, err);
+        if (st != SG_OK)
+            return st;
+    }
     while (j->pm.blocks < nblocks) {
         size_t last = j->pm.blocks + PHOTON_CHUNK < nblocks ? j->pm.blocks + PHOTON_CHUNK : nblocks;
         sg_status st = sg_photons_trace_more(j->w, &pd, last, &j->pm, err);
@@ -371,9 +558,11 @@ static sg_status run_photons(runner *r, sg_error *err)
     }
     report(r, j->pm.shot, pd.count, 1);
     float **E = NULL;
+    double t0 = omp_get_wtime();
     sg_status st = sg_irradiance_gather(j->w, &j->pm, &j->d.gather, &E, err);
     if (st != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     for (size_t m = 0; m < j->models; ++m) { /* the photons' E per side is indirect light */
         float *L = sg_bake__light(j->b, (uint32_t)m);
         size_t n = j->mw[m].ps->count;
@@ -406,32 +595,44 @@ static sg_status run_sites(runner *r, sg_error *err)
         j->stage = SG_BAKE_STAGE_GLOSSY;
         return j->prepared ? SG_OK : first_samples(j, err);
     }
+    double t0 = omp_get_wtime();
     if (!j->prepared && (st = first_samples(j, err)) != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     sg_transport_desc td = {.env_rays = j->d.direct_samples, .cos_rays = j->d.gather_rays,
                             .seed = j->d.photons.seed ^ 0xD1EC7ull, .threads = j->d.gather.threads,
                             .progress = on_sites, .progress_user = r};
     for (;;) {
         for (size_t m = 0; m < j->models; ++m) {
             sg_bake_job_model *x = &j->mw[m];
-            if (x->sampled &&
-                (st = sg_transport_gather(j->w, (uint32_t)m, &x->set, x->key_base, &td, &x->sites, err)) != SG_OK)
+            if (!x->sampled)
+                continue;
+            st = j->distributed ? sites_dist(r, (uint32_t)m, &td, err)
+                                : sg_transport_gather(j->w, (uint32_t)m, &x->set, x->key_base, &td, &x->sites, err);
+            if (st != SG_OK)
                 return st; /* SG_ERR_CANCELLED: sites.count says how far (invariant 2) */
         }
         on_sites(r, 0, 0);
+        if (j->distributed && (st = agree_stop(r, err)) != SG_OK)
+            return st;
         if (r->stop)
             return sg_error_set(err, SG_ERR_CANCELLED, "bake: cancelled after level %d", j->level);
         size_t added = 0;
-        if (j->level >= j->d.refine_levels || (st = refine(j, &added, err)) != SG_OK || added == 0)
+        t0 = omp_get_wtime();
+        int last = j->level >= j->d.refine_levels || (st = refine(j, &added, err)) != SG_OK || added == 0;
+        j->shared_seconds += omp_get_wtime() - t0;
+        if (last)
             break;
         ++j->level;
     }
     if (st != SG_OK)
         return st;
+    t0 = omp_get_wtime();
     if (j->d.indirect == SG_BAKE_INDIRECT_TRANSPORT && (st = solve_indirect(j, err)) != SG_OK)
         return st;
     if ((st = interpolate(j, err)) != SG_OK)
         return st;
+    j->shared_seconds += omp_get_wtime() - t0;
     j->stage = SG_BAKE_STAGE_GLOSSY;
     return SG_OK;
 }
@@ -470,10 +671,14 @@ static sg_status run_glossy(runner *r, sg_error *err)
         uint16_t *bins;
         sg_bake__glossy(j->b, (uint32_t)m, &splat, &nearest, &bins);
         memcpy(splat, x->set.splat, x->set.count * sizeof *splat);
+        double t0 = omp_get_wtime();
         if (!x->nearest && (st = nearest_samples(x, j->d.gather.normal_cos, j->d.gather.threads, err)) != SG_OK)
             return st;
+        j->shared_seconds += omp_get_wtime() - t0;
         memcpy(nearest, x->nearest, x->ps->count * sizeof *nearest);
         size_t stride = 3 * (size_t)res * (size_t)res;
+        if (j->distributed && (st = glossy_dist(r, (uint32_t)m, splat, res, stride, bins, &done, total, err)) != SG_OK)
+            return st;
         while (x->glossy_done < x->set.count) {
             if (report(r, done, total, 0))
                 return sg_error_set(err, SG_ERR_CANCELLED, "bake: cancelled in the glossy bins");
@@ -588,11 +793,19 @@ sg_status sg_bake_job_finish(sg_bake_job *j, sg_bake **out, sg_error *err)
     s->transport_iterations = j->ts.iterations;
     s->direct_seconds = j->seconds[SG_BAKE_STAGE_SITES];
     s->glossy_seconds = j->seconds[SG_BAKE_STAGE_GLOSSY];
+    s->shared_seconds = j->shared_seconds;
     s->gather_seconds = j->seconds[SG_BAKE_STAGE_SITES] + j->seconds[SG_BAKE_STAGE_GLOSSY];
     sg_bake__update_memory(j->b);
     *out = j->b;
     j->b = NULL;
     return SG_OK;
+}
+
+void sg_bake_job_set_comm(sg_bake_job *j, const sg_bake_comm *c)
+{
+    assert(c && c->size >= 1 && c->rank >= 0 && c->rank < c->size && c->exchange);
+    j->comm = *c;
+    j->distributed = 1;
 }
 
 void sg_bake_job__borrow_photons(sg_bake_job *j, const sg_photon_map *pm)

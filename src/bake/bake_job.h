@@ -39,6 +39,7 @@
 #include <stddef.h>
 
 #include "bake/bake.h"
+#include "bake/bake_comm.h"
 #include "core/error.h"
 #include "render/world.h"
 
@@ -82,6 +83,15 @@ sg_bake_progress sg_bake_job_progress(const sg_bake_job *j);
  * the job: *out is the caller's (sg_bake_destroy). SG_ERR_INVALID_ARG if
  * the job is not done or was finished already. */
 sg_status sg_bake_job_finish(sg_bake_job *j, sg_bake **out, sg_error *err);
+
+/* Splits the job's remaining work among c->size ranks (bake_comm.h):
+ * every rank runs its own job of the same world, parameters and state
+ * (created, or loaded from the same checkpoint) with the same c->size and
+ * its own c->rank, and calls sg_bake_job_run at the same time; each ends
+ * with the same bake and the same progress, bit for bit, as one job alone.
+ * Progress is reported on every rank (a program prints rank 0's). c is
+ * copied; c->user must outlive the job's runs. Also for c->size == 1. */
+void sg_bake_job_set_comm(sg_bake_job *j, const sg_bake_comm *c);
 
 /* NULL is a no-op. */
 void sg_bake_job_destroy(sg_bake_job *j);

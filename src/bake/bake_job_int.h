@@ -16,6 +16,7 @@
 #ifndef SG_BAKE_BAKE_JOB_INT_H
 #define SG_BAKE_BAKE_JOB_INT_H
 
+#include "bake/bake_comm.h"
 #include "bake/bake_job.h"
 #include "bake/photons.h"
 #include "bake/samples.h"
@@ -48,6 +49,10 @@ struct sg_bake_job {
     int prepared;            /* SITES: level-0 samples and e0 made           */
     sg_transport_stats ts;   /* of the last solve                            */
     double seconds[3];       /* wall time per stage, this process            */
+    double shared_seconds;   /* of which the work not divided among ranks
+                                (bake_comm.h), this process                 */
+    sg_bake_comm comm;       /* the ranks sharing the work (bake_comm.h)     */
+    int distributed;         /* comm was set: work in rounds over the ranks   */
 };
 
 /* For bake_io.c: a job of stage `stage` whose per-model state the caller

@@ -266,6 +266,86 @@ sg_status sg_photons_trace(const sg_world *w, const sg_photon_desc *desc, sg_pho
     return st;
 }
 
+sg_status sg_photons_trace_range(const sg_world *w, const sg_photon_desc *desc, size_t first_block,
+                                 size_t last_block, sg_photon_map *out, sg_error *err)
+{
+    sg_photon_desc d = sg_photon_desc_resolve(desc);
+    d.progress = NULL;
+    /* An empty map that claims blocks [0, first_block): trace_more appends
+     * only the blocks after them, each traced from its own photon indices
+     * (invariant 2), so the records are exactly those of the range. */
+    sg_photon_map m = {.blocks = first_block};
+    sg_status st = sg_photons_trace_more(w, &d, last_block, &m, err);
+    if (st != SG_OK) {
+        sg_photon_map_free(&m);
+        return st;
+    }
+    *out = m;
+    return SG_OK;
+}
+
+enum { PACK_HEAD = 9 * sizeof(uint64_t) };
+
+sg_status sg_photon_map_pack(const sg_photon_map *piece, size_t first_block, void **buf, size_t *bytes,
+                             sg_error *err)
+{
+    size_t n = piece->count, rec_bytes = sg_photon_map_bytes(1), total;
+    if (!sg_mul_size(n, rec_bytes, &total) || total > SIZE_MAX - PACK_HEAD)
+        return sg_error_set(err, SG_ERR_NOMEM, "photons: %zu records are too many to send", n);
+    total += PACK_HEAD;
+    unsigned char *out = sg_alloc_array(total, 1), *p = out;
+    if (!out)
+        return sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for %zu bytes of records to send", total);
+    const sg_ray_stats *r = &piece->rays;
+    uint64_t head[9] = {first_block, piece->blocks, n, r->rays, r->nodes, r->leaves, r->isects, r->splats, r->hits};
+    memcpy(p, head, sizeof head);
+    p += sizeof head;
+    const float *arrays[12] = {piece->px, piece->py, piece->pz, piece->nx, piece->ny, piece->nz,
+                               piece->wx, piece->wy, piece->wz, piece->fr, piece->fg, piece->fb};
+    for (int a = 0; a < 12 && n; ++a, p += n * sizeof(float))
+        memcpy(p, arrays[a], n * sizeof(float));
+    if (n)
+        memcpy(p, piece->model, n * sizeof(uint32_t));
+    *buf = out;
+    *bytes = total;
+    return SG_OK;
+}
+
+sg_status sg_photon_map_append_packed(sg_photon_map *m, const sg_photon_desc *desc, const void *buf, size_t bytes,
+                                      size_t *used, sg_error *err)
+{
+    sg_photon_desc d = sg_photon_desc_resolve(desc);
+    const unsigned char *p = buf;
+    uint64_t head[9];
+    if (bytes < PACK_HEAD)
+        return sg_error_set(err, SG_ERR_CORRUPT, "photons: a piece of %zu bytes is cut short", bytes);
+    memcpy(head, p, sizeof head);
+    p += PACK_HEAD;
+    size_t n = (size_t)head[2], rec_bytes = sg_photon_map_bytes(1);
+    if (head[0] != m->blocks || head[1] < head[0] || head[1] > sg_photon_block_count(&d) ||
+        n > (bytes - PACK_HEAD) / rec_bytes)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "photons: a piece of blocks [%llu, %llu) with %zu records does not continue a map of "
+                            "%zu blocks",
+                            (unsigned long long)head[0], (unsigned long long)head[1], n, m->blocks);
+    if (!reserve(m, m->count + n))
+        return sg_error_set(err, SG_ERR_NOMEM, "photons: out of memory for %zu records", m->count + n);
+    float *arrays[12] = {m->px, m->py, m->pz, m->nx, m->ny, m->nz, m->wx, m->wy, m->wz, m->fr, m->fg, m->fb};
+    for (int a = 0; a < 12 && n; ++a, p += n * sizeof(float))
+        memcpy(arrays[a] + m->count, p, n * sizeof(float));
+    if (n)
+        memcpy(m->model + m->count, p, n * sizeof(uint32_t));
+    p += n * sizeof(uint32_t);
+    sg_ray_stats r = {.rays = head[3], .nodes = head[4], .leaves = head[5], .isects = head[6], .splats = head[7],
+                      .hits = head[8]};
+    sg_ray_stats_add(&m->rays, &r);
+    m->count += n;
+    m->blocks = (size_t)head[1];
+    m->shot = m->blocks * SG_PHOTON_BLOCK < d.count ? m->blocks * SG_PHOTON_BLOCK : d.count;
+    *used = (size_t)(p - (const unsigned char *)buf);
+    return SG_OK;
+}
+
 void sg_photon_map_free(sg_photon_map *m)
 {
     if (!m)

@@ -121,6 +121,28 @@ sg_status sg_photons_trace_more(const sg_world *w, const sg_photon_desc *d, size
  * SG_ERR_CANCELLED *out is written: the completed prefix, as above. */
 sg_status sg_photons_trace(const sg_world *w, const sg_photon_desc *d, sg_photon_map *out, sg_error *err);
 
+/* For the distributed bake (bake/bake_comm.h): blocks [first_block,
+ * last_block) of the pass traced alone into *out (overwritten without
+ * freeing): out->blocks = last_block, its records and rays those of the
+ * range only, a piece for sg_photon_map_append_packed. No progress calls;
+ * errors as sg_photons_trace_more. */
+sg_status sg_photons_trace_range(const sg_world *w, const sg_photon_desc *d, size_t first_block,
+                                 size_t last_block, sg_photon_map *out, sg_error *err);
+
+/* A piece made by sg_photons_trace_range as bytes in this build's native
+ * layout (u64 first and last block, u64 records, the 6 ray counters, then
+ * the 13 arrays); *buf is allocated here (sg_free). */
+sg_status sg_photon_map_pack(const sg_photon_map *piece, size_t first_block, void **buf, size_t *bytes,
+                             sg_error *err);
+
+/* Appends the piece packed at buf (at most `bytes` bytes: pieces may
+ * follow) to m, whose next block must be the piece's first; *used gets its
+ * length. The result equals the map traced in one pass (invariant 2 of
+ * photons.c). SG_ERR_CORRUPT for a piece that does not fit its counts or
+ * does not continue m; m unchanged then. d: the pass (for m->shot). */
+sg_status sg_photon_map_append_packed(sg_photon_map *m, const sg_photon_desc *d, const void *buf, size_t bytes,
+                                      size_t *used, sg_error *err);
+
 /* Bytes a map of count records takes (the 13 arrays). */
 size_t sg_photon_map_bytes(size_t count);
 

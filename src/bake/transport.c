@@ -414,6 +414,101 @@ sg_status sg_transport_gather(const sg_world *w, uint32_t m, const sg_sample_set
     return st;
 }
 
+/* ---- packing for the distributed bake --------------------------------------- */
+
+/* Bytes per sample and per hit of a packed piece (transport.h). */
+enum {
+    PACK_HEAD = 2 * sizeof(uint64_t),
+    PACK_PER_SAMPLE = (6 + 6 + 2 + 2) * sizeof(float) + 2 * sizeof(uint64_t),
+    PACK_PER_HIT = 2 * sizeof(uint32_t) + sizeof(float)
+};
+
+static unsigned char *put(unsigned char *p, const void *src, size_t n)
+{
+    if (n)
+        memcpy(p, src, n);
+    return p + n;
+}
+
+sg_status sg_site_data_pack(const sg_site_data *sd, void **buf, size_t *bytes, sg_error *err)
+{
+    size_t c = sd->count, h = sd->hits, a, b, total;
+    if (!sg_mul_size(c, PACK_PER_SAMPLE, &a) || !sg_mul_size(h, PACK_PER_HIT, &b) || a + b < a ||
+        a + b > SIZE_MAX - PACK_HEAD)
+        return sg_error_set(err, SG_ERR_NOMEM, "bake: %zu sample points' sites are too many to send", c);
+    total = PACK_HEAD + a + b;
+    unsigned char *out = sg_alloc_array(total, 1), *p = out;
+    if (!out)
+        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu bytes of sites to send", total);
+    uint64_t head[2] = {c, h};
+    p = put(p, head, sizeof head);
+    p = put(p, sd->ratio, 6 * c * sizeof(float));
+    p = put(p, sd->unshadowed, 6 * c * sizeof(float));
+    p = put(p, sd->sigma, 2 * c * sizeof(float));
+    p = put(p, sd->dist, 2 * c * sizeof(float));
+    for (size_t i = 0; i < 2 * c; ++i) {
+        uint64_t n = sd->first[i + 1] - sd->first[i];
+        p = put(p, &n, sizeof n);
+    }
+    p = put(p, sd->hit_splat, h * sizeof(uint32_t));
+    p = put(p, sd->hit_model, h * sizeof(uint32_t));
+    p = put(p, sd->hit_k, h * sizeof(float));
+    assert((size_t)(p - out) == total);
+    *buf = out;
+    *bytes = total;
+    return SG_OK;
+}
+
+sg_status sg_site_data_append_packed(sg_site_data *sd, const void *buf, size_t bytes, size_t *used, sg_error *err)
+{
+    const unsigned char *p = buf;
+    uint64_t head[2];
+    if (bytes < PACK_HEAD)
+        return sg_error_set(err, SG_ERR_CORRUPT, "bake: a piece of sites of %zu bytes is cut short", bytes);
+    memcpy(head, p, sizeof head);
+    p += PACK_HEAD;
+    size_t c = (size_t)head[0], h = (size_t)head[1];
+    if (c > (bytes - PACK_HEAD) / PACK_PER_SAMPLE || h > (bytes - PACK_HEAD - c * PACK_PER_SAMPLE) / PACK_PER_HIT)
+        return sg_error_set(err, SG_ERR_CORRUPT, "bake: a piece of %zu bytes cannot hold %zu sites and %zu hits",
+                            bytes, 2 * c, h);
+    const unsigned char *counts = p + 16 * c * sizeof(float);
+    uint64_t sum = 0;
+    for (size_t i = 0; i < 2 * c; ++i) {
+        uint64_t n;
+        memcpy(&n, counts + i * sizeof n, sizeof n);
+        sum += n > h ? h + 1 : n; /* no wrap: each term is at most h + 1 */
+    }
+    if (sum != h)
+        return sg_error_set(err, SG_ERR_CORRUPT, "bake: a piece's sites name %llu hits, it holds %zu",
+                            (unsigned long long)sum, h);
+    if (!reserve_sites(sd, sd->count + c) || !reserve_hits(sd, sd->hits + h))
+        return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu sample points' light", sd->count + c);
+    size_t s0 = sd->count;
+    memcpy(sd->ratio + 6 * s0, p, 6 * c * sizeof(float));
+    p += 6 * c * sizeof(float);
+    memcpy(sd->unshadowed + 6 * s0, p, 6 * c * sizeof(float));
+    p += 6 * c * sizeof(float);
+    memcpy(sd->sigma + 2 * s0, p, 2 * c * sizeof(float));
+    p += 2 * c * sizeof(float);
+    memcpy(sd->dist + 2 * s0, p, 2 * c * sizeof(float));
+    p += 2 * c * sizeof(float);
+    for (size_t i = 0; i < 2 * c; ++i, p += sizeof(uint64_t)) {
+        uint64_t n;
+        memcpy(&n, p, sizeof n);
+        sd->first[2 * s0 + i + 1] = sd->first[2 * s0 + i] + (size_t)n; /* invariant 1 */
+    }
+    memcpy(sd->hit_splat + sd->hits, p, h * sizeof(uint32_t));
+    p += h * sizeof(uint32_t);
+    memcpy(sd->hit_model + sd->hits, p, h * sizeof(uint32_t));
+    p += h * sizeof(uint32_t);
+    memcpy(sd->hit_k + sd->hits, p, h * sizeof(float));
+    p += h * sizeof(float);
+    sd->hits += h;
+    sd->count += c;
+    *used = (size_t)(p - (const unsigned char *)buf);
+    return SG_OK;
+}
+
 sg_vec3 sg_transport_reflectance(const sg_material *m, sg_vec3 rho)
 {
     if (m->type != SG_MATERIAL_GGX || !(m->specular > 0.0f))

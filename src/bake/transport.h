@@ -108,6 +108,18 @@ sg_transport_desc sg_transport_desc_resolve(const sg_transport_desc *d);
 sg_status sg_transport_gather(const sg_world *w, uint32_t m, const sg_sample_set *set, uint64_t key_base,
                               const sg_transport_desc *d, sg_site_data *sd, sg_error *err);
 
+/* For the distributed bake (bake/bake_comm.h): the sites of all of sd's
+ * samples as bytes, in this build's native layout (u64 samples, u64 hits,
+ * then ratio, unshadowed, sigma, dist, the hits per site as u64, and the
+ * hits' splat, model and k arrays); *buf is allocated here (sg_free). */
+sg_status sg_site_data_pack(const sg_site_data *sd, void **buf, size_t *bytes, sg_error *err);
+
+/* Appends the samples packed at buf (at most `bytes` bytes: pieces may
+ * follow) to sd, as if sg_transport_gather had traced them next; *used
+ * gets the piece's length. SG_ERR_CORRUPT for a piece that does not fit
+ * its own counts; sd unchanged then. */
+sg_status sg_site_data_append_packed(sg_site_data *sd, const void *buf, size_t bytes, size_t *used, sg_error *err);
+
 /* The per-model inputs of the solve. */
 typedef struct sg_transport_model {
     const sg_site_data *sites;   /* gathered, sites->count samples         */
