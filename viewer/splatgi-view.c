@@ -337,8 +337,10 @@ static int run_headless(viewer *v)
     mean /= (double)n;
     size_t k95 = (size_t)ceil(0.95 * (double)n);
     double p95 = times[(k95 ? k95 : 1) - 1];
-    printf("splatgi-view: %zu frames %d x %d to %s: mean %.2f ms, 95th percentile %.2f ms, %.2f Mrays/s\n", n, w,
-           h, o->out, mean * 1e3, p95 * 1e3, total_render > 0.0 ? total_rays / total_render * 1e-6 : 0.0);
+    printf("splatgi-view: %zu frames %d x %d to %s: mean %.2f ms, 95th percentile %.2f ms, %.2f Mrays/s, %.3f rays "
+           "a pixel (anti-aliasing %s)\n",
+           n, w, h, o->out, mean * 1e3, p95 * 1e3, total_render > 0.0 ? total_rays / total_render * 1e-6 : 0.0,
+           total_rays / ((double)n * w * h), o->aa.mode == SG_VIEW_AA_CORNER ? "corner" : "none");
     rc = 0;
     goto done;
 fail_err:
