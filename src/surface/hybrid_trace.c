@@ -13,10 +13,25 @@
  * or opened by a rule of the node and the ray alone), pruning only drops
  * spheres that begin beyond the best hit, and ties at equal t go to the
  * lower key (triangles by leaf order, then nodes), so the minimum is
- * unique (invariant 2). That holds exactly for triangles, which lie in
- * every ancestor's bound; a level-of-detail disk is clipped by its own
- * sphere only and may reach a rounding outside an ancestor's bound, so at
- * coarse levels of detail a pixel may depend on the order (push_children).
+ * unique (invariant 2).
+ *
+ * Order. Pruning needs every accepted crossing of a subtree to lie at or
+ * beyond the entry of each bound on the way down to it. A triangle does
+ * (it lies in all of them; the entries are rounded down). A disk is
+ * clipped by its own sphere only, and a node's sphere is not inside its
+ * parent's, nor its disk exactly inside its quantised slab: a disk can
+ * start a rounding (or more) before an ancestor's entry, and was then
+ * found in one order and pruned in the other (stack and heap frames
+ * differed in a pixel at lod 2, test_hybrid lod_orders_agree). So an
+ * entry carries its floor, the latest entry of the bounds from the root
+ * down to it (max of the parent's floor and its own entry: still a lower
+ * bound of every crossing in it), and a disk met before its node's floor
+ * is taken at the floor (a shift along the ray below the node's diameter,
+ * which is below the footprint). And whether a node is a point or opened
+ * depends on the node and the ray only, never on the best hit so far: a
+ * disk the ray meets makes the node a point, and if the disk is not
+ * nearer than the best, the node is done (before, it was opened, so its
+ * triangles could win in one order and not in another).
  *
  * Level of detail (§3.4). Ye compares the projected diameter d/z 2R with a
  * threshold; with a footprint of width w(t) = width + spread t per pixel
@@ -68,7 +83,8 @@ enum {
 #define CONE_MARGIN 1e-4f
 
 typedef struct entry {
-    float t;      /* entry distance of the node's sphere (lowered by m) */
+    float t;      /* floor: latest entry of the bounds from the root to the
+                     node (each lowered by its margin m); "Order" above */
     uint32_t id;  /* node id | LOD_BIT when it may be hit as a point    */
 } entry;
 
@@ -137,7 +153,7 @@ enum { NODE_OPEN = 0, NODE_SKIP = 1, NODE_HIT = 2 };
 
 /* For a node that faces one way along the ray: skip it when that side is
  * not accepted; when it is a level-of-detail candidate, hit its disk. */
-static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, int lod, counters *c)
+static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, int lod, float floor, counters *c)
 {
     const sg_stree_bundle *B = &h->tree.bundles[k / W];
     const int l = (int)(k % W);
@@ -161,13 +177,19 @@ static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, 
     /* Plane through centre + off n: t = ((c + off n - o) . n) / (d . n). */
     float num = (cx - r->o[0]) * n.x + (cy - r->o[1]) * n.y + (cz - r->o[2]) * n.z + off;
     float t = num / dn;
-    if (!(t >= r->tmin) || !better(t, ((uint64_t)1 << 32) | k, bst))
+    if (!(t >= r->tmin))
         return NODE_OPEN;
     float px = r->o[0] + t * r->d[0] - cx, py = r->o[1] + t * r->d[1] - cy, pz = r->o[2] + t * r->d[2] - cz;
     if (!(px * px + py * py + pz * pz <= R * R))
         return NODE_OPEN; /* beside the disk: look at what is really there */
     if (sg_ray_is_self(r->ray, t, n))
         return NODE_OPEN;
+    /* The node is a point for this ray whatever else it meets ("Order"):
+     * its crossing is taken no nearer than its floor, and when that is
+     * not the best so far the node is done, never opened. */
+    t = t < floor ? floor : t;
+    if (!better(t, ((uint64_t)1 << 32) | k, bst))
+        return NODE_SKIP;
     bst->t = t;
     bst->key = ((uint64_t)1 << 32) | k;
     bst->b1 = bst->b2 = 0.0f;
@@ -243,8 +265,8 @@ static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst
  * of detail may take that disk: the quick dragon's frames at lod 4 to 16
  * moved in relMSE's 5th digit, lod <= 2 kept every byte (docs/hybrid.md).
  * With SG_HYBRID_LOD_AT_POP (measuring) points are decided when popped. */
-static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, entry *out, int *found,
-                         counters *c)
+static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, float floor, entry *out,
+                         int *found, counters *c)
 {
     float tin[W];
     unsigned lod;
@@ -255,11 +277,12 @@ static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, best *b
         if (!(mask >> l & 1u))
             continue;
         const uint32_t k = cb * (uint32_t)W + (uint32_t)l;
+        const float ft = tin[l] > floor ? tin[l] : floor; /* the child's floor */
 #ifndef SG_HYBRID_LOD_AT_POP
         if (lod >> l & 1u) {
-            if (!(tin[l] <= bst->t))
+            if (!(ft <= bst->t))
                 continue; /* a disk found in this bundle is nearer */
-            const int what = node_point(h, k, r, bst, 1, c);
+            const int what = node_point(h, k, r, bst, 1, ft, c);
             if (what == NODE_HIT)
                 *found = 1;
             if (what != NODE_OPEN)
@@ -283,7 +306,7 @@ static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, best *b
                 __builtin_prefetch(nb + o);
         }
 #endif
-        entry e = {tin[l], k | ((lod >> l & 1u) ? LOD_BIT : 0u)};
+        entry e = {ft, k | ((lod >> l & 1u) ? LOD_BIT : 0u)};
         /* Insertion by descending t; equal t keeps lane order reversed, so
          * the lower lane is popped first (deterministic either way). */
         int j = n++;
@@ -304,7 +327,7 @@ static int visit(const sg_hybrid *h, entry e, const tray *r, best *bst, entry *k
     *nkids = 0;
     c->pops++;
     if ((e.id & LOD_BIT) || r->cull) {
-        int what = node_point(h, k, r, bst, (e.id & LOD_BIT) != 0, c);
+        int what = node_point(h, k, r, bst, (e.id & LOD_BIT) != 0, e.t, c);
         if (what == NODE_SKIP)
             return 0;
         if (what == NODE_HIT)
@@ -314,7 +337,7 @@ static int visit(const sg_hybrid *h, entry e, const tray *r, best *bst, entry *k
     if (sg_stree_is_leaf(word))
         return test_leaf(h, word, r, bst, c);
     int found = 0;
-    *nkids = push_children(h, word, r, bst, kids, &found, c);
+    *nkids = push_children(h, word, r, bst, e.t, kids, &found, c);
     return found;
 }
 
@@ -322,7 +345,7 @@ static void trace_stack(const sg_hybrid *h, const tray *r, best *bst, counters *
 {
     entry stack[STACK_CAP];
     int found = 0;
-    int sp = push_children(h, 0, r, bst, stack, &found, c);
+    int sp = push_children(h, 0, r, bst, -INFINITY, stack, &found, c);
     while (sp > 0) {
         entry e = stack[--sp];
         if (e.t > bst->t)
@@ -375,7 +398,7 @@ static int trace_heap(const sg_hybrid *h, const tray *r, best *bst, counters *c)
     entry heap[HEAP_CAP], kids[W];
     int n = 0;
     int found = 0;
-    int nk = push_children(h, 0, r, bst, kids, &found, c);
+    int nk = push_children(h, 0, r, bst, -INFINITY, kids, &found, c);
     for (int i = 0; i < nk; ++i)
         heap_push(heap, &n, kids[i]);
     while (n > 0) {
@@ -489,7 +512,7 @@ int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint
     best bst = {.t = ray->tmax, .key = UINT64_MAX};
     entry stack[STACK_CAP];
     int found = 0;
-    int sp = push_children(h, 0, &r, &bst, stack, &found, &c);
+    int sp = push_children(h, 0, &r, &bst, -INFINITY, stack, &found, &c);
     while (sp > 0 && !found) {
         entry e = stack[--sp];
         int n;
