@@ -257,13 +257,8 @@ static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst
  * in cache, rather than pushed and decided when popped: its disk is hit
  * (bst updated, *found set, nothing pushed), it is skipped, or it is
  * pushed to be opened. Measured on the 21.8M-triangle dragon at lod 1:
- * 7% fewer pops (6.0 -> 5.6 a ray), 3% more frames a second. Deciding
- * earlier also tests a point whose sibling would have pruned it when
- * popped; the disk of such a node can lie a rounding nearer than its
- * bound's entry (the disk is clipped by the sphere, not by the quantised
- * slab, nor by its ancestors' bounds), so a few pixels of a coarse level
- * of detail may take that disk: the quick dragon's frames at lod 4 to 16
- * moved in relMSE's 5th digit, lod <= 2 kept every byte (docs/hybrid.md).
+ * 7% fewer pops (6.0 -> 5.6 a ray), 3% more frames a second. The hit is
+ * the one a pop-time decision gives, as any order's is ("Order" above).
  * With SG_HYBRID_LOD_AT_POP (measuring) points are decided when popped. */
 static int push_children(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, float floor, entry *out,
                          int *found, counters *c)
