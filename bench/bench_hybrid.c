@@ -367,9 +367,24 @@ typedef struct report {
     const char *machine, *mesh;
     int threads, nproc, frames, split;
     double embree_mib[2]; /* per scene: Embree's memory, MiB (BVH, buffers, normals) */
+    double load[2];       /* 1-minute load average at the start and the end */
 } report;
 
 static report rep;
+
+/* The 1-minute load average (/proc/loadavg): others' work on the cores,
+ * reported beside the figures; NaN where unreadable. */
+static double load_now(void)
+{
+    double l = NAN;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        if (fscanf(f, "%lf", &l) != 1)
+            l = NAN;
+        fclose(f);
+    }
+    return l;
+}
 
 static int scene_index(const char *label) { return strcmp(label, "dragon") == 0 ? 0 : 1; }
 
@@ -662,8 +677,9 @@ static void write_md(FILE *f, const void *ctx)
     (void)ctx;
     fprintf(f, "# Hybrid point/triangle hierarchy vs Embree 3 triangles\n\n");
     fprintf(f, "Written by `build/bench/bench_hybrid --md docs/bench_hybrid.md` (bench/bench_hybrid.c); see docs/hybrid.md.\n\n");
-    fprintf(f, "Machine: %s, nproc %d; %d threads used. Embree %s (build quality HIGH).\n", rep.machine, rep.nproc,
-            rep.threads, embree_tris_version());
+    fprintf(f, "Machine: %s, nproc %d; %d threads used; load average (1 min) %.2f at the start, %.2f at the end. "
+               "Embree %s (build quality HIGH).\n",
+            rep.machine, rep.nproc, rep.threads, rep.load[0], rep.load[1], embree_tris_version());
     const char *mesh = strstr(rep.mesh, "shared/data/");
     fprintf(f, "Mesh: %s%s; scale scene: every triangle cut into %d^2. Frames 512x512, one primary ray per pixel, "
                "best of %d after one warm-up, each splatgi frame alternating with an Embree frame (the Embree "
@@ -705,7 +721,7 @@ int main(int argc, char **argv)
     printf("bench_hybrid: machine %s, nproc %d, threads %d, Embree %s, %dx%d frames, best of %d\n", machine, nproc,
            o.threads, embree_tris_version(), IMAGE_SIZE, IMAGE_SIZE, o.frames);
     rep = (report){.machine = machine, .mesh = o.mesh, .threads = o.threads, .nproc = nproc, .frames = o.frames,
-                   .split = o.split};
+                   .split = o.split, .load = {load_now(), NAN}};
 
     sg_error err;
     sg_mesh mesh = {0};
@@ -742,6 +758,8 @@ int main(int argc, char **argv)
         sg_mesh_free(&big);
     }
     sg_mesh_free(&mesh);
+    rep.load[1] = load_now();
+    printf("bench_hybrid: load average %.2f at the start, %.2f at the end\n", rep.load[0], rep.load[1]);
     if (o.csv && bench_write_file(o.csv, write_csv, NULL) == 0)
         printf("bench_hybrid: wrote %s\n", o.csv);
     if (o.md && bench_write_file(o.md, write_md, NULL) == 0)

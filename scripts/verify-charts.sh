@@ -7,6 +7,10 @@
 #   verify_scaling.png    fps, memory, per-ray traversal, times against model
 #                         size, per surface model
 #   verify_stability.png  the stability map as a heat-map table
+#   verify_hybrid_lod.png the hybrid hierarchy's level-of-detail threshold as
+#                         a speed-against-error curve (Ye 2005 fig. 11), from
+#                         bench_hybrid's CSV: DIR/hybrid.csv, else
+#                         DIR/../bench_hybrid.csv (docs/bench_hybrid.csv)
 # The surface models and their colours are the table below (names as in the
 # CSVs, src/verify/verify_int.h): a new model is one more line.
 # A chart whose CSV is absent is skipped. Exit 77 when gnuplot is missing.
@@ -277,4 +281,60 @@ set lmargin 16
 set bmargin 4
 plot "$tmpd/st" u 1:2:3 w image notitle, "$tmpd/st" u 1:2:4 w labels font ",9" notitle
 GP
+fi
+
+# ---- 5. hybrid level of detail: speed against error (Ye 2005 fig. 11) -------
+csv="$dir/hybrid.csv"
+[ -f "$csv" ] || csv="$dir/../bench_hybrid.csv"
+if [ -f "$csv" ] && grep -q ',hybrid-lod,' "$csv"; then
+  # bench_hybrid --csv columns (the first, machine, is quoted without commas): 3 scene, 4 triangles,
+  # 5 view, 6 method, 7 lod, 9 memory_mib, 11 embree_memory_mib, 13 fps, 16 embree_fps (the row's own),
+  # 17 ratio (fps / that), 21 lod_hit, 23 rel_mse (vs the hybrid's full-detail frame)
+  colours=("#1f6fb4" "#d62728" "#2ca02c" "#ff7f0e")
+  left=() right=() i=0 emb=()
+  for sv in $(awk -F, 'NR > 1 && $6 == "hybrid-lod" && !seen[$3 "/" $5]++ { print $3 "/" $5 }' "$csv"); do
+    sc="${sv%/*}" vw="${sv#*/}" f="$tmpd/hl_${sc}_$vw" c="${colours[$((i % 4))]}"
+    awk -F, -v s="$sc" -v v="$vw" 'NR > 1 && $3 == s && $5 == v && $6 == "hybrid-lod" {
+        printf "%g %g %g %s\n", 1000 / $13, ($23 > 0 ? $23 : 1e-6), $17, ($7 == 0 ? "full" : $7 "px") }' "$csv" |
+      sort -n >"$f"
+    [ -s "$f" ] || continue
+    tri="$(awk -F, -v s="$sc" 'NR > 1 && $3 == s { printf "%.1fM", $4 / 1e6; exit }' "$csv")"
+    mem="$(awk -F, -v s="$sc" 'NR > 1 && $3 == s { printf "%.0f / %.0f MiB", $9, $11; exit }' "$csv")"
+    # Embree's full-detail frame: the best (fastest) of its frames beside this scene and view's rows.
+    e="$(awk -F, -v s="$sc" -v v="$vw" 'NR > 1 && $3 == s && $5 == v && (b == "" || $16 > b) { b = $16 } END { print 1000 / b }' "$csv")"
+    t="$sc ($tri triangles, hybrid / Embree $mem), $vw"
+    left+=("\"$f\" u 1:2 w lp lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
+    left+=("\"$f\" u 1:2:4 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
+    emb+=("set arrow from $e, graph 0 to $e, graph 1 nohead dt 3 lw 1.5 lc rgb \"$c\"")
+    right+=("\"$f\" u 3:2 w lp lw 2 pt 7 ps 1.3 lc rgb \"$c\" t \"$t\"")
+    right+=("\"$f\" u 3:2:4 w labels offset char 0,0.9 font \",8\" tc rgb \"$c\" notitle")
+    i=$((i + 1))
+  done
+  if [ ${#left[@]} -gt 0 ]; then
+    {
+      echo "set terminal $(term 1500 650)"
+      echo "set termoption noenhanced"
+      echo "set multiplot layout 1,2 title \"Hybrid point/triangle hierarchy: level-of-detail threshold as speed against error (Ye 2005 fig. 11; 512x512 primary rays, $(awk -F, 'NR == 2 { print $2 }' "$csv") threads)\""
+      echo "set logscale y"
+      echo "set logscale x"
+      echo "set grid xtics ytics mxtics mytics lc rgb \"#cccccc\" dt 3"
+      echo "set key at graph 0.99, graph 0.5 right top box opaque font \",8\""
+      echo "set yrange [1e-6:0.3]"
+      echo "set ylabel \"relMSE against the hybrid's full-detail frame (0 drawn at 1e-6)\""
+      echo "set xlabel \"frame time, ms (best of the row's frames); dotted: Embree 3, full detail\""
+      echo "set title \"frame time against error per threshold (full = 0 px)\""
+      echo "set arrow from graph 0, first 0.005 to graph 1, first 0.005 nohead dt 4 lc rgb \"#b40000\""
+      printf '%s\n' "${emb[@]}"
+      echo "set format y \"%.0e\""
+      echo "plot $(IFS=,; echo "${left[*]}"), NaN w l dt 4 lc rgb \"#b40000\" t \"relMSE 0.005 (the issue's bound for LOD 1)\""
+      echo "unset arrow"
+      echo "set xlabel \"speed relative to Embree 3 at full detail (fps / the row's own Embree fps; > 1: faster)\""
+      echo "set title \"the same, against the Embree frame measured beside each (load-independent)\""
+      echo "set arrow from graph 0, first 0.005 to graph 1, first 0.005 nohead dt 4 lc rgb \"#b40000\""
+      echo "set arrow from 1, graph 0 to 1, graph 1 nohead dt 4 lc rgb \"#555555\""
+      echo "plot $(IFS=,; echo "${right[*]}"), NaN w l dt 4 lc rgb \"#b40000\" t \"relMSE 0.005 (the issue's bound for LOD 1)\""
+      echo "unset multiplot"
+    } >"$tmpd/hl.gp"
+    plot "$dir/verify_hybrid_lod.png" <"$tmpd/hl.gp"
+  fi
 fi

@@ -41,7 +41,8 @@
 #define KEYS_HELP                                                                                 \
     "Keys: W/A/S/D or arrows move, Q/E down/up, Shift faster, left-drag looks,\n"                 \
     "O toggles orbit, R resets, +/- exposure, P screenshot (out/shot_NNNN.exr + .png),\n"          \
-    "C starts/stops recording the camera path (out/path.txt), Esc quits.\n"
+    "X toggles anti-aliasing of still frames (--aa), C starts/stops recording the\n"               \
+    "camera path (out/path.txt), Esc quits.\n"
 
 static const char usage[] =
     "usage: splatgi-view SCENE.json|MODEL [--bake FILE.sgbake] [options]\n"
@@ -58,6 +59,13 @@ static const char usage[] =
     "  --move-scale S      resolution divisor while moving: 1, 2, 4, 8, or auto (the\n"
     "                      default: the smallest of 2, 4, 8 whose frame fits 1/30 s)\n"
     "  --threads N         render threads (default: all)\n"
+    "  --aa MODE           anti-aliasing of still (full-resolution) frames: none\n"
+    "                      (default: one ray per pixel) or corner (rays through the\n"
+    "                      pixel corners, each pixel refined where its corners differ)\n"
+    "  --aa-threshold T    corner: contrast |a-b|/(a+b) above which a pixel is refined\n"
+    "                      (default 0.1; coverage counts too)\n"
+    "  --aa-depth D        corner: levels of refinement, 0..6 (default 2: at most a\n"
+    "                      4 x 4 grid of squares a pixel; 0: Ye's four-corner average)\n"
     "  --path FILE         play a camera path (window), or render it (--headless)\n"
     "  --headless          no window: render every key of --path to --out DIR\n"
     "  --out DIR           headless output folder: frame_0000.png, ...\n"
@@ -84,6 +92,7 @@ typedef struct options {
     sg_model_scene_desc model; /* the scene made for a model file     */
     const char *write_scene;   /* --write-scene                       */
     sg_prog_world world;       /* --world, --if-stale                 */
+    sg_view_aa aa;             /* --aa, --aa-threshold, --aa-depth   */
 } options;
 
 static int fail(const char *fmt, ...)
@@ -135,7 +144,8 @@ static int parse_args(int argc, char **argv, options *o)
         }
         static const char *const with_value[] = {"--bake", "--camera", "--width", "--height", "--display",
                                                  "--view", "--exposure", "--move-scale", "--threads", "--path",
-                                                 "--out", "--frames", "--screenshot-on-exit"};
+                                                 "--out", "--frames", "--screenshot-on-exit", "--aa",
+                                                 "--aa-threshold", "--aa-depth"};
         int known = 0;
         for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
             known |= !strcmp(a, with_value[k]);
@@ -170,6 +180,20 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--frames")) {
             if (!parse_long(a, v, 1, 1L << 30, &n)) return 1;
             o->frames = n;
+        } else if (!strcmp(a, "--aa")) {
+            if (!strcmp(v, "none")) o->aa.mode = SG_VIEW_AA_NONE;
+            else if (!strcmp(v, "corner")) o->aa.mode = SG_VIEW_AA_CORNER;
+            else return fail("--aa: '%s' is not none or corner", v);
+        } else if (!strcmp(a, "--aa-depth")) {
+            if (!parse_long(a, v, 0, SG_CORNER_AA_MAX_DEPTH, &n)) return 1;
+            o->aa.max_depth = n == 0 ? -1 : (int)n; /* the desc's 0 is the default */
+        } else if (!strcmp(a, "--aa-threshold")) {
+            char *end;
+            errno = 0;
+            float t = strtof(v, &end);
+            if (errno || end == v || *end || !(t > 0.0f) || !isfinite(t))
+                return fail("--aa-threshold: '%s' is not a contrast > 0", v);
+            o->aa.threshold = t;
         } else if (!strcmp(a, "--exposure")) {
             char *end;
             errno = 0;
@@ -280,6 +304,7 @@ static int run_headless(viewer *v)
         return fail("out of memory");
     if (sg_view_frame_resize(&f, w, h, &err) != SG_OK)
         goto fail_err;
+    f.aa = o->aa;
     char file[4096];
     double total_rays = 0.0, total_render = 0.0;
     for (size_t i = 0; i < n; i++) {
@@ -312,8 +337,10 @@ static int run_headless(viewer *v)
     mean /= (double)n;
     size_t k95 = (size_t)ceil(0.95 * (double)n);
     double p95 = times[(k95 ? k95 : 1) - 1];
-    printf("splatgi-view: %zu frames %d x %d to %s: mean %.2f ms, 95th percentile %.2f ms, %.2f Mrays/s\n", n, w,
-           h, o->out, mean * 1e3, p95 * 1e3, total_render > 0.0 ? total_rays / total_render * 1e-6 : 0.0);
+    printf("splatgi-view: %zu frames %d x %d to %s: mean %.2f ms, 95th percentile %.2f ms, %.2f Mrays/s, %.3f rays "
+           "a pixel (anti-aliasing %s)\n",
+           n, w, h, o->out, mean * 1e3, p95 * 1e3, total_render > 0.0 ? total_rays / total_render * 1e-6 : 0.0,
+           total_rays / ((double)n * w * h), o->aa.mode == SG_VIEW_AA_CORNER ? "corner" : "none");
     rc = 0;
     goto done;
 fail_err:
@@ -392,6 +419,11 @@ static void key_cb(GLFWwindow *win, int key, int scancode, int action, int mods)
         break;
     }
     case GLFW_KEY_P: a->want_shot = 1; break;
+    case GLFW_KEY_X:
+        a->frame.aa.mode = a->frame.aa.mode == SG_VIEW_AA_NONE ? SG_VIEW_AA_CORNER : SG_VIEW_AA_NONE;
+        a->dirty = 1;
+        printf("splatgi-view: anti-aliasing of still frames %s\n", a->frame.aa.mode ? "corner" : "off");
+        break;
     case GLFW_KEY_C:
         if (a->recording) {
             a->recording = 0;
@@ -518,6 +550,7 @@ static int run_window(viewer *v)
     long frames = 0; /* drawn */
     frame_size(v, &w, &h);
     app a = {.v = v, .exposure = o->exposure, .play_index = (size_t)-1};
+    a.frame.aa = o->aa;
     sg_error err = {0};
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 2);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 1);

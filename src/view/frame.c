@@ -118,17 +118,17 @@ sg_status sg_view_frame_render(sg_view_frame *f, const sg_bake *b, const sg_worl
             return sg_error_set(err, SG_ERR_NOMEM, "frame %d x %d: out of memory", lw, lh);
     }
     sg_bake_frame_desc fd = {.camera = *cam, .width = lw, .height = lh, .threads = threads};
-    double sec = 0.0;
+    sg_corner_aa_stats as = {0};
     sg_image img = {0};
-    sg_status st = sg_view_render(b, w, &fd, &img, &sec, err);
+    sg_status st = sg_view_render_aa(b, w, &fd, scale == 1 ? &f->aa : NULL, &img, &as, err);
     if (st != SG_OK) {
         frame__forget(f);
         return st;
     }
     f->linear = img;
     f->scale = scale; /* invariant 2 */
-    f->render_seconds = sec;
-    f->rays = (size_t)lw * (size_t)lh;
+    f->render_seconds = as.seconds;
+    f->rays = (size_t)as.samples;
     st = sg_view_frame_redisplay(f, d, err);
     if (st != SG_OK)
         frame__forget(f);

@@ -10,7 +10,8 @@
  * aspect is the window's), so a reduced frame is a blockier version of the
  * full one; at scale 1 the frame is exactly sg_bake_render's image.
  * The viewer uses scale 2, 4 or 8 while the camera moves (sg_view_move_scale
- * picks it from the last frame's time) and 1 when it stops.
+ * picks it from the last frame's time) and 1 when it stops; a scale-1
+ * frame is anti-aliased when f->aa asks (sg_view_render_aa).
  * What it does NOT do: windows or GL (the program does), temporal
  * accumulation, filtering.
  *
@@ -32,6 +33,7 @@
 #include "io/image.h"
 #include "render/camera.h"
 #include "render/world.h"
+#include "view/render.h"
 
 #define SG_VIEW_MAX_SCALE 16
 
@@ -44,6 +46,9 @@ typedef struct sg_view_frame {
     double render_seconds;  /* sg_view_render of the last frame              */
     double display_seconds; /* display transform + upscale of the last frame */
     size_t rays;        /* primary rays of the last frame                    */
+    sg_view_aa aa;      /* anti-aliasing of full-resolution (scale 1) frames:
+                           set by the caller, zero = none; reduced frames are
+                           never anti-aliased (view/render.h)               */
 } sg_view_frame;
 
 /* Sets the output size (each in [1, SG_IMAGE_MAX_DIM]) and allocates rgba;

@@ -75,3 +75,56 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
     *out = img;
     return SG_OK;
 }
+
+typedef struct aa_ctx {
+    const sg_bake *b;
+    const sg_world *w;
+    const sg_envmap *env;
+    const sg_bake_frame_desc *d;
+} aa_ctx;
+
+/* One sample of the anti-aliased frame: sg_bake_render's pixel, at any
+ * image-plane point. */
+static void aa_sample(void *ctx, float x, float y, float rgb[3], float *coverage)
+{
+    const aa_ctx *c = ctx;
+    sg_ray ray = sg_camera_ray(&c->d->camera, x, y, c->d->width, c->d->height);
+    sg_world_hit h;
+    int hit = sg_world_intersect(c->w, &ray, &h, NULL);
+    sg_vec3 L = hit ? sg_bake_lookup(c->b, c->w, &h, sg_v3_scale(ray.dir, -1.0f)) : sg_envmap_eval(c->env, ray.dir);
+    rgb[0] = L.x;
+    rgb[1] = L.y;
+    rgb[2] = L.z;
+    *coverage = (float)hit;
+}
+
+sg_status sg_view_render_aa(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *desc, const sg_view_aa *aa,
+                            sg_image *out, sg_corner_aa_stats *stats, sg_error *err)
+{
+    if (aa && aa->mode != SG_VIEW_AA_NONE && aa->mode != SG_VIEW_AA_CORNER)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "anti-aliasing mode %d is not none (0) or corner (1)",
+                            (int)aa->mode);
+    if (!aa || aa->mode == SG_VIEW_AA_NONE) {
+        double sec = 0.0;
+        sg_status st = sg_view_render(b, w, desc, out, &sec, err);
+        if (st == SG_OK && stats) {
+            sg_bake_frame_desc d = *desc;
+            *stats = (sg_corner_aa_stats){.samples = (uint64_t)(d.width > 0 ? d.width : 512) *
+                                                     (uint64_t)(d.height > 0 ? d.height : 512),
+                                          .seconds = sec};
+        }
+        return st;
+    }
+    if (!b || !w || !desc || !out)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_view_render_aa: NULL argument");
+    if (sg_bake_model_count(b) != sg_world_model_count(w))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "sg_view_render_aa: the bake has %zu models, the world %zu",
+                            sg_bake_model_count(b), sg_world_model_count(w));
+    sg_bake_frame_desc d = *desc;
+    if (d.width <= 0) d.width = 512;
+    if (d.height <= 0) d.height = 512;
+    aa_ctx c = {b, w, sg_world_envmap(w), &d};
+    sg_corner_aa_desc cd = {.width = d.width, .height = d.height, .threshold = aa->threshold,
+                            .max_depth = aa->max_depth, .threads = d.threads};
+    return sg_corner_aa_render(&cd, aa_sample, &c, out, stats, err);
+}

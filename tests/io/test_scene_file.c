@@ -634,6 +634,19 @@ static void test_scene_file_examples(void **state)
         fclose(f);
     }
     sg_scene_file_free(&sf);
+
+    /* The hybrid dragon of the anti-aliasing figures (docs/hybrid.md). */
+    path = SG_SOURCE_DIR "/examples/dragon_hybrid_courtyard.json";
+    if (sg_scene_file_load(path, &sf, &err) != SG_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sf.model_count, 2);
+    if (sg_test_shared_data("meshes/stanford_dragon/dragon_vrip.ply")) {
+        FILE *f = fopen(sf.models[0].path, "rb");
+        if (!f)
+            fail_msg("model path %s does not open", sf.models[0].path);
+        fclose(f);
+    }
+    sg_scene_file_free(&sf);
 }
 
 /* ---- 9 ---------------------------------------------------------------- */

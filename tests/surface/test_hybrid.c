@@ -358,6 +358,60 @@ static void test_hybrid_threads_identical(void **state)
     sg_mesh_free(&m);
 }
 
+/* The ordered stack and Ye's heap visit nodes in different orders; the
+ * hit is the minimum over the accepted crossings either way (invariant 2
+ * of hybrid_trace.c), so frames agree bit for bit at full detail and at
+ * every level of detail on the sphere and, where ../shared/data is, the
+ * 45k-triangle dragon (a scanned, bumpy surface: disks of every size). */
+static void test_hybrid_lod_orders_agree(void **state)
+{
+    (void)state;
+    sg_mesh meshes[2] = {fine_sphere(), {0}};
+    int count = 1;
+    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
+    sg_error err = {0};
+    if (path && sg_mesh_read(path, &meshes[1], &err) == SG_OK) {
+        /* into the sphere's frame: centre at the origin, 2 units across */
+        sg_aabb b = sg_aabb_empty();
+        for (size_t i = 0; i < meshes[1].vertex_count; ++i)
+            b = sg_aabb_grow(b, vtx(&meshes[1], (uint32_t)i));
+        sg_vec3 c = sg_v3_scale(sg_v3_add(b.lo, b.hi), 0.5f);
+        float s = 2.0f / sg_v3_length(sg_v3_sub(b.hi, b.lo));
+        for (size_t i = 0; i < 3 * meshes[1].vertex_count; ++i)
+            meshes[1].positions[i] = (meshes[1].positions[i] - (&c.x)[i % 3]) * s;
+        sg_free(meshes[1].normals);
+        meshes[1].normals = NULL;
+        count = 2;
+    }
+    sg_hybrid_hit *a = sg_alloc_array(FRAME * FRAME, sizeof *a), *b = sg_alloc_array(FRAME * FRAME, sizeof *b);
+    assert_non_null(a);
+    assert_non_null(b);
+    const float lods[] = {-1.0f, 0.5f, 1.0f, 2.0f, 4.0f, 16.0f};
+    for (int m = 0; m < count; ++m) {
+        sg_hybrid_desc d = {.threads = 2, .name = "test mesh"};
+        sg_hybrid *hs = NULL, *hh = NULL;
+        assert_int_equal(sg_hybrid_create(&d, &meshes[m], &hs, &err), SG_OK);
+        d.traversal = SG_HYBRID_TRAVERSE_HEAP;
+        assert_int_equal(sg_hybrid_create(&d, &meshes[m], &hh, &err), SG_OK);
+        for (size_t k = 0; k < sizeof lods / sizeof lods[0]; ++k) {
+            uint64_t na = frame(hs, lods[k], 2, a);
+            frame(hh, lods[k], 2, b);
+            size_t diff = count_different(a, b);
+            print_message("%s, lod %g: %llu LOD hits, %zu pixels differ\n", m ? "dragon" : "sphere", (double)lods[k],
+                          (unsigned long long)na, diff);
+            if (diff)
+                fail_msg("%s at lod %g: %zu of %d pixels differ between stack and heap", m ? "dragon" : "sphere",
+                         (double)lods[k], diff, FRAME * FRAME);
+        }
+        sg_hybrid_destroy(hs);
+        sg_hybrid_destroy(hh);
+    }
+    sg_free(a);
+    sg_free(b);
+    for (int m = 0; m < count; ++m)
+        sg_mesh_free(&meshes[m]);
+}
+
 /* ---- 6-7: spawned rays, sites --------------------------------------------- */
 
 static sg_vec3 random_dir(uint64_t *rng)
@@ -856,6 +910,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_lod_zero_is_full),
         cmocka_unit_test(test_hybrid_lod_error_bound),
         cmocka_unit_test(test_hybrid_threads_identical),
+        cmocka_unit_test(test_hybrid_lod_orders_agree),
         cmocka_unit_test(test_hybrid_no_self_hits),
         cmocka_unit_test(test_hybrid_hit_sites),
         cmocka_unit_test(test_hybrid_bad_meshes),

@@ -1,6 +1,9 @@
 /* test_render.c — the viewer's frame (view/render.h) against the bake's
- * (sg_bake_render), and the quad query it traces with
- * (sg_world_intersect4) against sg_world_intersect. */
+ * (sg_bake_render), the quad query it traces with (sg_world_intersect4)
+ * against sg_world_intersect, and its anti-aliased still frame
+ * (sg_view_render_aa: off is sg_view_render; corner supersampling gives a
+ * plane's silhouette its exact coverage within the derived bound, flat
+ * pixels their value, 1 and 2 threads the same bits). */
 #include "test_support.h"
 
 #include <math.h>
@@ -8,6 +11,7 @@
 #include <string.h>
 
 #include "bake/bake.h"
+#include "render/corner_aa.h"
 #include "render/world.h"
 #include "view/render.h"
 
@@ -116,11 +120,193 @@ static void test_world_intersect4_matches_single(void **state)
     sg_world_destroy(w);
 }
 
+/* Anti-aliasing off (NULL, or mode none) is sg_view_render bit for bit,
+ * alpha included; a bad mode is refused. */
+static void test_view_render_aa_off_is_plain(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json(SCENE);
+    sg_bake_desc bd = {.photons = {.count = 20000, .seed = 3}, .direct_samples = 2};
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    const int W = 37, H = 29;
+    sg_bake_frame_desc fd = {.camera = camera(sg_v3(0.8f, 1.4f, 1.6f), sg_v3(0, 0.8f, 0), (float)W / (float)H),
+                             .width = W, .height = H, .threads = 2};
+    sg_image ref = {0};
+    assert_int_equal(sg_view_render(b, w, &fd, &ref, NULL, &err), SG_OK);
+    const sg_view_aa none = {.mode = SG_VIEW_AA_NONE, .threshold = 0.3f, .max_depth = 3};
+    for (int k = 0; k < 2; ++k) {
+        sg_image img = {0};
+        sg_corner_aa_stats st;
+        assert_int_equal(sg_view_render_aa(b, w, &fd, k ? &none : NULL, &img, &st, &err), SG_OK);
+        assert_memory_equal(ref.data, img.data, sizeof(float) * 3 * W * H);
+        assert_memory_equal(ref.alpha, img.alpha, sizeof(float) * W * H);
+        assert_true(st.samples == (uint64_t)W * H);
+        sg_image_free(&img);
+    }
+    sg_view_aa bad = {.mode = (sg_view_aa_mode)7};
+    sg_image img = {0};
+    assert_int_equal(sg_view_render_aa(b, w, &fd, &bad, &img, NULL, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "mode 7"));
+    assert_null(img.data);
+    sg_image_free(&ref);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
+/* Pixel coordinates (camera.h) of world point p. */
+static void project(const sg_camera *c, int width, int height, sg_vec3 p, double *px, double *py)
+{
+    double dx = p.x - c->eye.x, dy = p.y - c->eye.y, dz = p.z - c->eye.z;
+    double f = dx * c->forward.x + dy * c->forward.y + dz * c->forward.z;
+    double r = dx * c->right.x + dy * c->right.y + dz * c->right.z;
+    double u = dx * c->up.x + dy * c->up.y + dz * c->up.z;
+    *px = (r / f / ((double)c->tan_half_fov * c->aspect) + 1.0) * 0.5 * width;
+    *py = (1.0 - u / f / (double)c->tan_half_fov) * 0.5 * height;
+}
+
+/* Area of the unit square at (i, j) where a x + b y < c (clipped polygon,
+ * shoelace, double). */
+static double half_plane_area(double a, double b, double c, int i, int j)
+{
+    double px[8], py[8];
+    const double sx[4] = {i, i + 1, i + 1, i}, sy[4] = {j, j, j + 1, j + 1};
+    int n = 0;
+    for (int k = 0; k < 4; ++k) {
+        int k1 = (k + 1) % 4;
+        double f0 = a * sx[k] + b * sy[k] - c, f1 = a * sx[k1] + b * sy[k1] - c;
+        if (f0 < 0.0) {
+            px[n] = sx[k];
+            py[n++] = sy[k];
+        }
+        if ((f0 < 0.0) != (f1 < 0.0)) {
+            double s = f0 / (f0 - f1);
+            px[n] = sx[k] + s * (sx[k1] - sx[k]);
+            py[n++] = sy[k] + s * (sy[k1] - sy[k]);
+        }
+    }
+    double a2 = 0.0;
+    for (int k = 0; k < n; ++k)
+        a2 += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k];
+    return fabs(a2) * 0.5;
+}
+
+/* The far edge of a hybrid ground (exact triangles, so a straight
+ * silhouette) against a uniform sky, the camera rolled so the edge runs
+ * slanted. Bounds:
+ *  - coverage of each pixel the edge crosses within 1/(2N) + 1/(4N^2) of
+ *    its exact area (corner_aa.c), N = 2^depth, plus 1e-3 for the float
+ *    camera rays (their directions are rounded to ~1e-7 relative, which
+ *    moves the edge by < 1e-4 pixel here);
+ *  - the sky is a constant, so a sky pixel's corners are equal and its
+ *    mean is the value bit for bit; a ground pixel away from the edge
+ *    reads the bake's lookup, which in this furnace (a lone plane under
+ *    a uniform sky) is albedo x sky within 1% at every pixel (the bound
+ *    bake::test_transport asserts): an uncut pixel (the mean of 4
+ *    lookups) and the plain pixel (one) differ by at most 2% of it;
+ *  - 1 and 2 threads: the same bits. */
+static void test_view_render_aa_edge(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json(
+        "{\"models\":[{\"builtin\":\"ground\",\"points\":400,\"material\":{\"albedo\":[0.5,0.5,0.5],"
+        "\"use_point_colors\":false},\"surface\":{\"model\":\"hybrid\"}}],"
+        "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
+    sg_bake_desc bd = {.photons = {.seed = 5}};
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    const sg_aabb box = sg_world_bounds(w);
+    const int W = 64, H = 48;
+    sg_camera cam;
+    if (sg_camera_look_at(sg_v3(0, 4, 0.5f * box.hi.z), sg_v3(0, 0, box.lo.z), sg_v3(0.3f, 1, 0), 45.0f,
+                          (float)W / (float)H, &cam, NULL) != SG_OK)
+        fail_msg("camera");
+    /* The edge z = lo.z, y = 0 as a line a x + b y = c in pixels; covered
+     * on the side of the ground's centre. */
+    double x0, y0, x1, y1, xc, yc;
+    project(&cam, W, H, sg_v3(box.lo.x, 0, box.lo.z), &x0, &y0);
+    project(&cam, W, H, sg_v3(box.hi.x, 0, box.lo.z), &x1, &y1);
+    project(&cam, W, H, sg_v3(0, 0, 0.5f * (box.lo.z + box.hi.z)), &xc, &yc);
+    double a = y1 - y0, bb = x0 - x1, c = a * x0 + bb * y0;
+    if (a * xc + bb * yc > c) {
+        a = -a, bb = -bb, c = -c;
+    }
+    sg_bake_frame_desc fd = {.camera = cam, .width = W, .height = H, .threads = 1};
+    sg_image plain = {0}, aa1 = {0}, aa2 = {0};
+    assert_int_equal(sg_view_render(b, w, &fd, &plain, NULL, &err), SG_OK);
+    const sg_view_aa aa = {.mode = SG_VIEW_AA_CORNER};
+    sg_corner_aa_stats s1, s2;
+    assert_int_equal(sg_view_render_aa(b, w, &fd, &aa, &aa1, &s1, &err), SG_OK);
+    fd.threads = 2;
+    assert_int_equal(sg_view_render_aa(b, w, &fd, &aa, &aa2, &s2, &err), SG_OK);
+    assert_memory_equal(aa1.data, aa2.data, sizeof(float) * 3 * W * H);
+    assert_memory_equal(aa1.alpha, aa2.alpha, sizeof(float) * W * H);
+    assert_true(s1.samples == s2.samples && s1.refined == s2.refined);
+    const double N = 1 << SG_CORNER_AA_DEPTH, bound = 1.0 / (2.0 * N) + 1.0 / (4.0 * N * N) + 1e-3;
+    const double ground = 0.35, flat = 0.02 * ground;
+    int edge = 0, sky = 0, inside = 0;
+    double worst = 0.0, worst_flat = 0.0, sum = 0.0, sum_plain = 0.0;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const size_t at = (size_t)j * W + (size_t)i;
+            const double area = half_plane_area(a, bb, c, i, j), cov = aa1.alpha[at];
+            const float *p = aa1.data + 3 * at, *q = plain.data + 3 * at;
+            /* Signed distances of the corners from the edge, pixels:
+             * within 1e-3 of the edge a sample may go either way. */
+            double dmin = INFINITY, dmax = -INFINITY;
+            for (int k = 0; k < 4; ++k) {
+                double d = (a * (i + (k & 1)) + bb * (j + (k >> 1)) - c) / sqrt(a * a + bb * bb);
+                dmin = fmin(dmin, d);
+                dmax = fmax(dmax, d);
+            }
+            if (dmin < 1e-3 && dmax > -1e-3) {
+                edge++;
+                worst = fmax(worst, fabs(cov - area));
+                sum += fabs(cov - area);
+                sum_plain += fabs(plain.alpha[at] - area);
+                if (fabs(cov - area) > bound)
+                    fail_msg("edge pixel (%d, %d): coverage %.5f, exact area %.5f (bound %.4f)", i, j, cov, area,
+                             bound);
+                /* Its colour: the mix of ground and sky the coverage says. */
+                double want = cov * ground + (1.0 - cov) * 0.7;
+                if (fabs(p[1] - want) > flat)
+                    fail_msg("edge pixel (%d, %d): %.5f, coverage %.4f says %.5f", i, j, p[1], cov, want);
+            } else if (dmin >= 1e-3) {
+                sky++;
+                if (memcmp(p, q, 3 * sizeof(float)) || cov != 0.0)
+                    fail_msg("sky pixel (%d, %d): %.9g, plain %.9g, coverage %g", i, j, p[1], q[1], cov);
+            } else {
+                inside++;
+                worst_flat = fmax(worst_flat, fabs(p[1] - q[1]));
+                if (cov != 1.0 || fabs(p[1] - q[1]) > flat)
+                    fail_msg("ground pixel (%d, %d): %.6f, plain %.6f (bound %.4f), coverage %g", i, j, p[1], q[1],
+                             flat, cov);
+            }
+        }
+    print_message("edge: %d pixels, coverage error mean %.4f worst %.4f (bound %.4f; one ray: mean %.4f); %d sky, "
+                  "%d ground pixels, ground vs plain worst %.2g; %llu samples for %d pixels, %llu refined\n",
+                  edge, sum / edge, worst, bound, sum_plain / edge, sky, inside, worst_flat,
+                  (unsigned long long)s1.samples, W * H, (unsigned long long)s1.refined);
+    assert_true(edge >= W && sky > 200 && inside > 200);
+    assert_true(sum < 0.25 * sum_plain);
+    sg_image_free(&plain);
+    sg_image_free(&aa1);
+    sg_image_free(&aa2);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_view_render_matches_bake_render),
         cmocka_unit_test(test_world_intersect4_matches_single),
+        cmocka_unit_test(test_view_render_aa_off_is_plain),
+        cmocka_unit_test(test_view_render_aa_edge),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
