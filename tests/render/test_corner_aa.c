@@ -37,31 +37,8 @@ static void sample_half_plane(void *ctx, float x, float y, float rgb[3], float *
     *coverage = (float)in;
 }
 
-/* Area of the unit square at (i, j) where a x + b y < c: the square
- * clipped by the half-plane (Sutherland-Hodgman), shoelace, in double. */
-static double exact_area(const half_plane *h, int i, int j)
-{
-    double px[8], py[8];
-    const double sx[4] = {i, i + 1, i + 1, i}, sy[4] = {j, j, j + 1, j + 1};
-    int n = 0;
-    for (int k = 0; k < 4; ++k) {
-        int k1 = (k + 1) % 4;
-        double f0 = h->a * sx[k] + h->b * sy[k] - h->c, f1 = h->a * sx[k1] + h->b * sy[k1] - h->c;
-        if (f0 < 0.0) {
-            px[n] = sx[k];
-            py[n++] = sy[k];
-        }
-        if ((f0 < 0.0) != (f1 < 0.0)) {
-            double s = f0 / (f0 - f1);
-            px[n] = sx[k] + s * (sx[k1] - sx[k]);
-            py[n++] = sy[k] + s * (sy[k1] - sy[k]);
-        }
-    }
-    double a2 = 0.0;
-    for (int k = 0; k < n; ++k)
-        a2 += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k];
-    return fabs(a2) * 0.5;
-}
+/* Area of the unit square at (i, j) where a x + b y < c. */
+static double exact_area(const half_plane *h, int i, int j) { return sg_test_half_plane_area(h->a, h->b, h->c, i, j); }
 
 static void test_edge_coverage(void **state)
 {

@@ -78,3 +78,27 @@ struct sg_world *sg_test_world_from_json(const char *json)
     sg_scene_file_free(&sf);
     return w;
 }
+
+double sg_test_half_plane_area(double a, double b, double c, int i, int j)
+{
+    double px[8], py[8];
+    const double sx[4] = {i, i + 1, i + 1, i}, sy[4] = {j, j, j + 1, j + 1};
+    int n = 0;
+    for (int k = 0; k < 4; ++k) {
+        int k1 = (k + 1) % 4;
+        double f0 = a * sx[k] + b * sy[k] - c, f1 = a * sx[k1] + b * sy[k1] - c;
+        if (f0 < 0.0) {
+            px[n] = sx[k];
+            py[n++] = sy[k];
+        }
+        if ((f0 < 0.0) != (f1 < 0.0)) {
+            double s = f0 / (f0 - f1);
+            px[n] = sx[k] + s * (sx[k1] - sx[k]);
+            py[n++] = sy[k] + s * (sy[k1] - sy[k]);
+        }
+    }
+    double a2 = 0.0;
+    for (int k = 0; k < n; ++k)
+        a2 += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k];
+    return fabs(a2) * 0.5;
+}

@@ -33,6 +33,11 @@ const char *sg_test_shared_data(const char *relpath);
 struct sg_world;
 struct sg_world *sg_test_world_from_json(const char *json);
 
+/* Area of the unit pixel square at (i, j) where a x + b y < c: the square
+ * clipped by the half-plane (Sutherland-Hodgman), shoelace, in double.
+ * The exact coverage anti-aliasing tests compare against. */
+double sg_test_half_plane_area(double a, double b, double c, int i, int j);
+
 /* Deterministic uniform float in [0,1) from a 64-bit state (splitmix64). */
 float sg_test_rand01(uint64_t *state);
 

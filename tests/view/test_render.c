@@ -167,32 +167,6 @@ static void project(const sg_camera *c, int width, int height, sg_vec3 p, double
     *py = (1.0 - u / f / (double)c->tan_half_fov) * 0.5 * height;
 }
 
-/* Area of the unit square at (i, j) where a x + b y < c (clipped polygon,
- * shoelace, double). */
-static double half_plane_area(double a, double b, double c, int i, int j)
-{
-    double px[8], py[8];
-    const double sx[4] = {i, i + 1, i + 1, i}, sy[4] = {j, j, j + 1, j + 1};
-    int n = 0;
-    for (int k = 0; k < 4; ++k) {
-        int k1 = (k + 1) % 4;
-        double f0 = a * sx[k] + b * sy[k] - c, f1 = a * sx[k1] + b * sy[k1] - c;
-        if (f0 < 0.0) {
-            px[n] = sx[k];
-            py[n++] = sy[k];
-        }
-        if ((f0 < 0.0) != (f1 < 0.0)) {
-            double s = f0 / (f0 - f1);
-            px[n] = sx[k] + s * (sx[k1] - sx[k]);
-            py[n++] = sy[k] + s * (sy[k1] - sy[k]);
-        }
-    }
-    double a2 = 0.0;
-    for (int k = 0; k < n; ++k)
-        a2 += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k];
-    return fabs(a2) * 0.5;
-}
-
 /* The far edge of a hybrid ground (exact triangles, so a straight
  * silhouette) against a uniform sky, the camera rolled so the edge runs
  * slanted. Bounds:
@@ -253,7 +227,7 @@ static void test_view_render_aa_edge(void **state)
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) {
             const size_t at = (size_t)j * W + (size_t)i;
-            const double area = half_plane_area(a, bb, c, i, j), cov = aa1.alpha[at];
+            const double area = sg_test_half_plane_area(a, bb, c, i, j), cov = aa1.alpha[at];
             const float *p = aa1.data + 3 * at, *q = plain.data + 3 * at;
             /* Signed distances of the corners from the edge, pixels:
              * within 1e-3 of the edge a sample may go either way. */
