@@ -2,10 +2,13 @@
  * bench_common.h). */
 #include "bench_common.h"
 
+#include <time.h>
+
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/stat.h>
 #include <stdarg.h>
 #include <unistd.h>
@@ -134,4 +137,23 @@ sg_status bench_place_mesh(const char *mesh_path, float length, sg_ground_placem
     if (sg_mesh_ground_placement(b, length, out, NULL) != SG_OK)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: empty or degenerate bounds", mesh_path);
     return SG_OK;
+}
+
+double bench_cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double bench_load1(void)
+{
+    double l = NAN;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        if (fscanf(f, "%lf", &l) != 1)
+            l = NAN;
+        fclose(f);
+    }
+    return l;
 }

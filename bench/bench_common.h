@@ -24,6 +24,14 @@ int bench_fail(const char *prog, const char *fmt, ...)
 /* The CPU model from /proc/cpuinfo ("unknown" if absent). */
 void bench_cpu_model(char *out, size_t cap);
 
+/* CPU seconds of this process, all its threads (CLOCK_PROCESS_CPUTIME_ID):
+ * unlike wall time, not inflated by other work sharing the cores. */
+double bench_cpu_seconds(void);
+
+/* The 1-minute load average (/proc/loadavg), NaN where unreadable:
+ * others' work on the cores, printed beside the figures. */
+double bench_load1(void);
+
 /* mkdir -p; 1 on success. */
 int bench_make_dirs(const char *path);
 

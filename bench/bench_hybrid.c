@@ -115,13 +115,6 @@ static int nrows;
 
 #define fail(...) bench_fail("bench_hybrid", __VA_ARGS__)
 
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* ---- options ----------------------------------------------------------- */
 
 static int parse_lods(const char *s, options *o)
@@ -372,20 +365,6 @@ typedef struct report {
 
 static report rep;
 
-/* The 1-minute load average (/proc/loadavg): others' work on the cores,
- * reported beside the figures; NaN where unreadable. */
-static double load_now(void)
-{
-    double l = NAN;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (f) {
-        if (fscanf(f, "%lf", &l) != 1)
-            l = NAN;
-        fclose(f);
-    }
-    return l;
-}
-
 static int scene_index(const char *label) { return strcmp(label, "dragon") == 0 ? 0 : 1; }
 
 /* ---- frames ------------------------------------------------------------ */
@@ -405,7 +384,7 @@ static sg_status hybrid_frame(const sg_hybrid *h, const sg_camera *cam, const sg
         return st;
     const int tiles_x = IMAGE_SIZE / TILE, tiles = tiles_x * tiles_x;
     sg_hybrid_stats total = {0};
-    double c0 = cpu_now(), t0 = omp_get_wtime();
+    double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
 #pragma omp parallel num_threads(threads)
     {
         sg_hybrid_stats local = {0};
@@ -434,7 +413,7 @@ static sg_status hybrid_frame(const sg_hybrid *h, const sg_camera *cam, const sg
         sg_hybrid_stats_add(&total, &local);
     }
     fs->seconds = omp_get_wtime() - t0;
-    fs->cpu = cpu_now() - c0;
+    fs->cpu = bench_cpu_seconds() - c0;
     fs->st = total;
     *out = img;
     return SG_OK;
@@ -721,7 +700,7 @@ int main(int argc, char **argv)
     printf("bench_hybrid: machine %s, nproc %d, threads %d, Embree %s, %dx%d frames, best of %d\n", machine, nproc,
            o.threads, embree_tris_version(), IMAGE_SIZE, IMAGE_SIZE, o.frames);
     rep = (report){.machine = machine, .mesh = o.mesh, .threads = o.threads, .nproc = nproc, .frames = o.frames,
-                   .split = o.split, .load = {load_now(), NAN}};
+                   .split = o.split, .load = {bench_load1(), NAN}};
 
     sg_error err;
     sg_mesh mesh = {0};
@@ -758,7 +737,7 @@ int main(int argc, char **argv)
         sg_mesh_free(&big);
     }
     sg_mesh_free(&mesh);
-    rep.load[1] = load_now();
+    rep.load[1] = bench_load1();
     printf("bench_hybrid: load average %.2f at the start, %.2f at the end\n", rep.load[0], rep.load[1]);
     if (o.csv && bench_write_file(o.csv, write_csv, NULL) == 0)
         printf("bench_hybrid: wrote %s\n", o.csv);

@@ -54,13 +54,6 @@ static const char usage[] =
     "same hits, and the printed hit checksum (FNV-1a over each pixel's hit flag\n"
     "and t) lets two builds of the code be compared for identical results.\n";
 
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 typedef struct frame {
     double wall, cpu;     /* best frame                               */
     sg_ray_stats stats;   /* summed over one frame                    */
@@ -76,7 +69,7 @@ static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam
     int n = size * size, half = size / 2;
     for (int f = 0; f < frames; ++f) {
         sg_ray_stats total = {0};
-        double w0 = omp_get_wtime(), c0 = cpu_seconds();
+        double w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
 #pragma omp parallel num_threads(threads)
         {
             sg_ray_stats st = {0};
@@ -115,7 +108,7 @@ static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam
 #pragma omp critical
             sg_ray_stats_add(&total, &st);
         }
-        double wall = omp_get_wtime() - w0, cpu = cpu_seconds() - c0;
+        double wall = omp_get_wtime() - w0, cpu = bench_cpu_seconds() - c0;
         if (wall < best.wall) {
             best.wall = wall;
             best.cpu = cpu;
@@ -258,16 +251,16 @@ int main(int argc, char **argv)
     /* builds */
     sg_scene_desc sd = {.model = SG_SURFACE_MLS, .threads = threads};
     sg_scene *scene = NULL;
-    double w0 = omp_get_wtime(), c0 = cpu_seconds();
+    double w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
     if (!iso_only && sg_scene_create(&sd, &ps, &scene, &err) != SG_OK)
         return bench_fail("bench_iso", "mls: %s", err.message);
-    double mls_wall = omp_get_wtime() - w0, mls_cpu = cpu_seconds() - c0;
+    double mls_wall = omp_get_wtime() - w0, mls_cpu = bench_cpu_seconds() - c0;
     sg_iso *iso = NULL;
     w0 = omp_get_wtime();
-    c0 = cpu_seconds();
+    c0 = bench_cpu_seconds();
     if (sg_iso_create(&idesc, &ps, &iso, &err) != SG_OK)
         return bench_fail("bench_iso", "iso: %s", err.message);
-    double iso_wall = omp_get_wtime() - w0, iso_cpu = cpu_seconds() - c0;
+    double iso_wall = omp_get_wtime() - w0, iso_cpu = bench_cpu_seconds() - c0;
     sg_scene_info si = {0};
     sg_iso_info ii;
     if (scene)

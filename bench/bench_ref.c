@@ -328,14 +328,6 @@ static sg_ref_desc ref_desc(const sg_camera *cam, int size, int spp, uint64_t se
     return d;
 }
 
-static double cpu_now(void)
-{
-    struct timespec ts;
-    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0)
-        return NAN;
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* sg_ref_render `runs` times; *res is the first render with the shortest
  * wall time of all (same desc: the same image every time), *cpu the
  * smallest process CPU time of a render (may be NULL). */
@@ -343,14 +335,14 @@ static sg_status render_best(const sg_world *w, const sg_ref_desc *d, int runs, 
                              sg_error *err)
 {
     sg_ref_result first = {0};
-    double c0 = cpu_now();
+    double c0 = bench_cpu_seconds();
     sg_status st = sg_ref_render(w, d, &first, err);
-    double best_cpu = cpu_now() - c0;
+    double best_cpu = bench_cpu_seconds() - c0;
     for (int k = 1; k < runs && st == SG_OK; k++) {
         sg_ref_result again = {0};
-        c0 = cpu_now();
+        c0 = bench_cpu_seconds();
         st = sg_ref_render(w, d, &again, err);
-        best_cpu = fmin(best_cpu, cpu_now() - c0);
+        best_cpu = fmin(best_cpu, bench_cpu_seconds() - c0);
         if (st == SG_OK && again.seconds < first.seconds)
             first.seconds = again.seconds;
         sg_ref_result_free(&again);

@@ -161,7 +161,7 @@ typedef struct report {
     const char *machine, *env_used;
     const char *args;        /* bench_view's arguments, space-separated */
     int nproc;
-    double load0[3], load1[3];
+    double load0, load1;     /* 1-minute load average at the start and the end */
     size_t keys;
     const row *rows;
     int nrows;
@@ -293,28 +293,10 @@ static int parse_options(int argc, char **argv, options *o)
 /* ---- machine and files ------------------------------------------------ */
 
 
-static void load_avg(double l[3])
-{
-    l[0] = l[1] = l[2] = NAN;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (!f)
-        return;
-    if (fscanf(f, "%lf %lf %lf", &l[0], &l[1], &l[2]) != 3)
-        l[0] = l[1] = l[2] = NAN;
-    fclose(f);
-}
-
 
 
 /* CPU seconds of the process over all its threads: what the frame cost
  * the machine, whatever other processes took of the cores meanwhile. */
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static void write_text(FILE *f, const void *ctx)
 {
     fputs((const char *)ctx, f);
@@ -487,10 +469,10 @@ static sg_status walker_key(walker *k, const sg_display *d, const sg_campath_key
     sg_status st = sg_campath_camera(key, (float)r->width / (float)r->height, &cam, err);
     if (st != SG_OK)
         return st;
-    double t0 = omp_get_wtime(), c0 = cpu_seconds();
+    double t0 = omp_get_wtime(), c0 = bench_cpu_seconds();
     st = sg_view_frame_render(&k->f, k->b, k->w, &cam, 1, threads, d, err);
     k->t[k->m] = omp_get_wtime() - t0;
-    k->cpu += cpu_seconds() - c0;
+    k->cpu += bench_cpu_seconds() - c0;
     k->render += k->f.render_seconds;
     k->display += k->f.display_seconds;
     if (st != SG_OK)
@@ -612,7 +594,7 @@ static void write_csv(FILE *f, const void *ctx)
                 r->points, mat_name[r->mat], surf_name[r->surf], r->width, r->height, r->frames, r->stride,
                 r->mean_ms, r->p95_ms, r->min_ms, r->max_ms, r->render_ms, r->display_ms, r->fps, r->cpu_ms,
                 r->splats, r->world_s, r->bake_s, r->trace_s, r->gather_s, rp->o->photons, rp->o->direct,
-                rp->o->threads, rp->load0[0], rp->load1[0], rp->env_used, rp->machine, r->move_scale,
+                rp->o->threads, rp->load0, rp->load1, rp->env_used, rp->machine, r->move_scale,
                 r->move_mean_ms, r->move_p95_ms, r->move_fps, r->snap_off[0], r->snap_off[1]);
     }
 }
@@ -721,7 +703,7 @@ static void write_md(FILE *f, const void *ctx)
                "the cores; *CPU ms* is the process's CPU time per frame over all its threads, which does not "
                "include that: on an idle machine a frame takes about CPU ms / threads). "
                "Made by `scripts/bench-view.sh` (bench/bench_view.c), which ran `bench_view%s`.\n\n",
-            rp->machine, rp->nproc, o->threads, rp->load0[0], rp->load1[0], rp->nproc, rp->args);
+            rp->machine, rp->nproc, o->threads, rp->load0, rp->load1, rp->nproc, rp->args);
     fprintf(f, "Scene: the Stanford dragon sampled to N points, %g units long, standing on the builtin ground, "
                "under `%s`. Bakes: the default transport estimator, %d envmap rays per sample site and the "
                "default cosine rays; *diffuse* = Lambert albedo %g, *glossy* = GGX "
@@ -851,9 +833,9 @@ int main(int argc, char **argv)
         snprintf(args + used, sizeof args - used, " %s", argv[i]);
     }
     report rp = {.o = &o, .machine = machine, .nproc = (int)sysconf(_SC_NPROCESSORS_ONLN), .args = args};
-    load_avg(rp.load0);
+    rp.load0 = bench_load1();
     printf("bench_view: machine %s, nproc %d, omp_get_max_threads %d, threads %d, load %.2f%s\n", machine,
-           rp.nproc, omp_get_max_threads(), o.threads, rp.load0[0], o.quick ? " (quick)" : "");
+           rp.nproc, omp_get_max_threads(), o.threads, rp.load0, o.quick ? " (quick)" : "");
 
     sg_error err;
     scene_setup setup = {0};
@@ -978,11 +960,11 @@ int main(int argc, char **argv)
             }
         }
     }
-    load_avg(rp.load1);
+    rp.load1 = bench_load1();
     rp.rows = rows;
     rp.nrows = nrows;
 
-    printf("\nsummary (%s, %d threads, load %.2f -> %.2f)\n", machine, o.threads, rp.load0[0], rp.load1[0]);
+    printf("\nsummary (%s, %d threads, load %.2f -> %.2f)\n", machine, o.threads, rp.load0, rp.load1);
     print_head();
     for (int i = 0; i < nrows; i++)
         print_row(&rows[i]);

@@ -28,6 +28,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_common.h"
 #include "bake/bake.h"
 #include "bake/bake_io.h"
 #include "display/ocio.h"
@@ -42,25 +43,6 @@ enum { TILE = 16, LOOKUP = 32 };
 /* CPU seconds of this process (all threads): unlike wall time, it does
  * not count the time other processes hold the cores, so A/B ratios stay
  * meaningful on a loaded machine. */
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static double load1(void)
-{
-    double l = NAN;
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (f) {
-        if (fscanf(f, "%lf", &l) != 1)
-            l = NAN;
-        fclose(f);
-    }
-    return l;
-}
-
 /* One primary ray per pixel in the bake's tile order; with_weights adds
  * the lookup's gather. Returns seconds; *sink keeps the work alive. */
 static double primary_pass(const sg_world *w, const sg_camera *cam, int width, int height, int threads,
@@ -154,7 +136,7 @@ int main(int argc, char **argv)
     size_t differ = 0;
     sg_ray_stats rs = {0};
     int frames = 0;
-    double l0 = load1();
+    double l0 = bench_load1();
     for (size_t k = 0; k < path.count; k += (size_t)stride) {
         sg_camera cam;
         if (sg_campath_camera(&path.keys[k], (float)width / (float)height, &cam, &err) != SG_OK)
@@ -164,34 +146,34 @@ int main(int argc, char **argv)
         double s;
         /* Alternate which renderer goes first, so neither always gets the warmer cache. */
         for (int pass = 0; pass < 2; ++pass) {
-            c0 = cpu_now();
+            c0 = bench_cpu_seconds();
             if ((pass == 0) == (k / (size_t)stride % 2 == 0)) {
                 if (only_view)
                     continue;
                 if (sg_bake_render(b, w, &fd, &ib, &s, &err) != SG_OK)
                     return fprintf(stderr, "%s\n", err.message), 1;
                 sum[BAKE] += s;
-                cpu[BAKE] += cpu_now() - c0;
+                cpu[BAKE] += bench_cpu_seconds() - c0;
             } else {
                 if (sg_view_render(b, w, &fd, &iv, &s, &err) != SG_OK)
                     return fprintf(stderr, "%s\n", err.message), 1;
                 sum[VIEW] += s;
-                cpu[VIEW] += cpu_now() - c0;
+                cpu[VIEW] += bench_cpu_seconds() - c0;
             }
         }
         for (int ph = ISECT; ph <= WEIGHTS_REF && !only_view; ++ph) {
-            c0 = cpu_now();
+            c0 = bench_cpu_seconds();
             sum[ph] += primary_pass(w, &cam, width, height, threads, ph - ISECT, &sink, NULL);
-            cpu[ph] += cpu_now() - c0;
+            cpu[ph] += bench_cpu_seconds() - c0;
         }
         if (!only_view)
             primary_pass(w, &cam, width, height, threads, 0, &sink, &rs);
         t0 = omp_get_wtime();
-        c0 = cpu_now();
+        c0 = bench_cpu_seconds();
         if (sg_display_apply(disp, &iv, rgba, &err) != SG_OK)
             return fprintf(stderr, "%s\n", err.message), 1;
         sum[DISPLAY] += omp_get_wtime() - t0;
-        cpu[DISPLAY] += cpu_now() - c0;
+        cpu[DISPLAY] += bench_cpu_seconds() - c0;
         for (size_t i = 0; !only_view && i < (size_t)width * (size_t)height * 3; ++i) {
             double a = ib.data[i], v = iv.data[i];
             double rel = fabs(a - v) / fmax(fabs(a), 1e-6);
@@ -205,7 +187,7 @@ int main(int argc, char **argv)
         ++frames;
     }
     printf("%dx%d, %d frames (every %d-th key), %d threads, load %.2f -> %.2f\n", width, height, frames, stride,
-           threads, l0, load1());
+           threads, l0, bench_load1());
     for (int p = 0; p < PHASES; ++p)
         printf("  %-11s %8.2f ms/frame wall, %8.2f ms/frame CPU (all threads)\n", name[p], 1e3 * sum[p] / frames,
                1e3 * cpu[p] / frames);

@@ -46,18 +46,11 @@ static const char usage[] =
     "  --out DIR        scene and world files (default out/bench_world)\n"
     "  --csv PATH       append rows (default out/bench_world/bench_world.csv)\n";
 
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 typedef struct timing {
     double wall, cpu;
 } timing;
 
-static timing since(double w0, double c0) { return (timing){omp_get_wtime() - w0, cpu_seconds() - c0}; }
+static timing since(double w0, double c0) { return (timing){omp_get_wtime() - w0, bench_cpu_seconds() - c0}; }
 
 /* Drops path's pages from the page cache (clean after the writer's
  * fsync), so the next read comes from the disk; 1 on success. */
@@ -154,19 +147,19 @@ int main(int argc, char **argv)
             rc = bench_fail("bench_world", "%s", err.message);
             break;
         }
-        double w0 = omp_get_wtime(), c0 = cpu_seconds();
+        double w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
         if (sg_world_create(&sf, &built, &err) != SG_OK) {
             rc = bench_fail("bench_world", "build: %s", err.message);
             goto next;
         }
         timing tb = since(w0, c0);
-        w0 = omp_get_wtime(), c0 = cpu_seconds();
+        w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
         if (sg_world_save(built, &sf, world_path, &err) != SG_OK) {
             rc = bench_fail("bench_world", "save: %s", err.message);
             goto next;
         }
         timing ts = since(w0, c0);
-        w0 = omp_get_wtime(), c0 = cpu_seconds();
+        w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
         if (sg_world_load(world_path, &sf, NULL, &loaded, &err) != SG_OK) {
             rc = bench_fail("bench_world", "load: %s", err.message);
             goto next;
@@ -176,7 +169,7 @@ int main(int argc, char **argv)
         loaded = NULL;
         timing tc = {NAN, NAN};
         if (evict(world_path)) {
-            w0 = omp_get_wtime(), c0 = cpu_seconds();
+            w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
             if (sg_world_load(world_path, &sf, NULL, &loaded, &err) != SG_OK) {
                 rc = bench_fail("bench_world", "cold load: %s", err.message);
                 goto next;

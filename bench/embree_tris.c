@@ -9,6 +9,7 @@
  *     schedule; only the intersector differs.
  *  3. the device, scene, build time and memory are embree_device.h's.
  */
+#include "bench_common.h"
 #include "embree_tris.h"
 
 #include "embree_device.h"
@@ -92,13 +93,6 @@ const char *embree_tris_version(void) { return RTC_VERSION_STRING; }
 double embree_tris_build_seconds(const embree_tris *e) { return e->dev.build_seconds; }
 size_t embree_tris_memory_bytes(const embree_tris *e) { return e->dev.memory_bytes; }
 
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* One pixel: invariant 2. */
 static int pixel(const embree_tris *e, const sg_ray *r, float *rgb, uint32_t *id, float *t)
 {
@@ -139,7 +133,7 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
     int tiles = tiles_x * tiles_y;
     uint64_t hits = 0;
     int nthreads = threads > 0 ? threads : omp_get_max_threads();
-    double c0 = cpu_now(), t0 = omp_get_wtime();
+    double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) reduction(+ : hits)
     for (int t = 0; t < tiles; t++) {
         int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
@@ -158,7 +152,7 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
                     t_out[pix] = tt;
             }
     }
-    double seconds = omp_get_wtime() - t0, cpu = cpu_now() - c0;
+    double seconds = omp_get_wtime() - t0, cpu = bench_cpu_seconds() - c0;
     *out = img;
     if (stats) {
         embree_tris_stats s = {0};
