@@ -58,6 +58,13 @@ sg_vec3 sg_ref_path_counted(const sg_world *w, const sg_ref_desc *d, float x, fl
     sg_ref_counts c = {0}; /* this path's hits (pathtrace.h) */
     const sg_envmap *env = sg_world_envmap(w);
     sg_ray ray = sg_camera_ray(&d->camera, x, y, d->width, d->height);
+    /* The reference sees the exact surface: its camera rays carry no
+     * footprint, so surfaces with levels of detail (ISO, hybrid) trace
+     * them to full depth. With the pixel's footprint its primary hits were
+     * the coarse patches the viewer takes, and a bake's lookup frame then
+     * agreed with its "reference" on the very approximation it should be
+     * measured against. */
+    ray.spread = 0.0f;
     sg_vec3 L = {0, 0, 0}, beta = {1, 1, 1};
     float prev_pdf_b = 0.0f; /* pdf of the BSDF sample that made `ray` */
     for (int depth = 0;; ++depth) {

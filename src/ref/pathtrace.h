@@ -16,6 +16,11 @@
  * standard errors are honest (no heavy tail of rare paths whose
  * throughput grew).
  *
+ * Surfaces: the exact ones. Camera rays carry no footprint (sg_ray.spread
+ * 0), so the ISO and hybrid surfaces trace them to full depth: their
+ * levels of detail are what the viewer and a bake's lookup frame choose,
+ * and the reference is what those choices are measured against.
+ *
  * Determinism: every random number is sg_rng_float(seed, path, bounce,
  * dim) with path = pixel * SG_REF_MAX_SPP + sample index, so the image is
  * bit-identical whatever the thread count, and passes with disjoint sample

@@ -34,8 +34,10 @@
  * files without colours give white points (no clay tint); 3: Russian
  * roulette only below throughput 1 (pathtrace.h), mesh samples on the
  * Phong-tessellated surface; 4: issue 12's leak-free surfaces (keyed
- * splats, radii per layer) and the back-hit counts in the .txt. */
-#define SG_VERIFY_REF_VERSION 4u
+ * splats, radii per layer) and the back-hit counts in the .txt; 5: camera
+ * rays without a footprint, so the ISO and hybrid surfaces' references
+ * see full detail (pathtrace.c). */
+#define SG_VERIFY_REF_VERSION 5u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

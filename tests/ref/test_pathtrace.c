@@ -221,6 +221,41 @@ static void test_ref_deterministic_across_threads(void **state)
     sg_world_destroy(w);
 }
 
+/* The reference traces the exact surface: the level of detail that the
+ * ISO and hybrid surfaces give camera rays (by their footprint) leaves its
+ * image untouched, bit for bit, while the same camera rays traced alone
+ * do meet coarse patches at that threshold (so the check can fail). */
+static void test_ref_full_detail_whatever_lod(void **state)
+{
+    (void)state;
+    const char *fmt = "{\"models\":[{\"builtin\":\"sphere\",\"points\":20000,\"transform\":{\"translate\":[0,1,0]},"
+                      "\"surface\":{\"model\":\"iso\",\"iso_lod\":%d}},{\"builtin\":\"ground\","
+                      "\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":%d}}],\"envmap\":{\"builtin\":\"sky\"}}";
+    char ja[1024], jb[1024];
+    snprintf(ja, sizeof ja, fmt, 16, 16);
+    snprintf(jb, sizeof jb, fmt, 0, 0);
+    sg_world *wa = sg_test_world_from_json(ja), *wb = sg_test_world_from_json(jb);
+    sg_ref_desc d = desc_look(sg_v3(0, 2.0f, 4.0f), sg_v3(0, 0.8f, 0), 40.0f, 24, 4, 6);
+    int coarse = 0;
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 24; ++x) {
+            sg_ray r = sg_camera_ray(&d.camera, (float)x + 0.5f, (float)y + 0.5f, 24, 24);
+            sg_world_hit ha, hb;
+            int a = sg_world_intersect(wa, &r, &ha, NULL), b = sg_world_intersect(wb, &r, &hb, NULL);
+            coarse += a != b || (a && ha.hit.t != hb.hit.t);
+        }
+    if (coarse == 0)
+        fail_msg("no camera ray met a coarse patch at lod 16: the test shows nothing");
+    sg_ref_result a, b;
+    assert_int_equal(sg_ref_render(wa, &d, &a, NULL), SG_OK);
+    assert_int_equal(sg_ref_render(wb, &d, &b, NULL), SG_OK);
+    assert_memory_equal(a.mean.data, b.mean.data, sizeof(float) * 3 * 24 * 24);
+    sg_ref_result_free(&a);
+    sg_ref_result_free(&b);
+    sg_world_destroy(wa);
+    sg_world_destroy(wb);
+}
+
 /* The estimator's variance falls as 1/N: the image-averaged squared
  * standard error at N = 4, 16, 64 paths per pixel lies on a log-log line
  * of slope -1 (least squares; +-0.15 covers the scatter of the variance
@@ -579,6 +614,7 @@ int main(void)
         cmocka_unit_test(test_ref_diffuse_sphere_under_hdr_map),
         cmocka_unit_test(test_ref_pixel_centres),
         cmocka_unit_test(test_ref_deterministic_across_threads),
+        cmocka_unit_test(test_ref_full_detail_whatever_lod),
         cmocka_unit_test(test_ref_variance_falls_as_one_over_n),
         cmocka_unit_test(test_ref_per_pixel_z_test),
         cmocka_unit_test(test_ref_z_scores_are_standard_normal),
