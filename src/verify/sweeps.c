@@ -54,9 +54,14 @@ typedef struct surf_cfg {
     int spc;               /* MLS samples per cell                           */
     float radius_scale;
     float iso_tolerance;   /* ISO patch error, smallest radii; 0 = default   */
+    float iso_lod;         /* ISO camera rays' level of detail, pixels
+                              ("iso_lod"); 0: full detail, so the error is
+                              the bake's and the surface's, not the coarse
+                              patches' (iso_lod1 shows those); < 0: the
+                              surface's default (scaling: the viewer's)  */
 } surf_cfg;
 
-static const surf_cfg default_cfg = {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0.0f};
+static const surf_cfg default_cfg = {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0.0f, 0};
 
 typedef struct plan {
     size_t points;         /* model points of SURFACES, BAKE, HEADLINE    */
@@ -107,9 +112,11 @@ static double iso_tolerance(const surf_cfg *cfg)
 
 static void surface_json(char *out, size_t cap, const surf_cfg *cfg)
 {
-    char tol[64] = "";
+    char tol[96] = "";
+    if (cfg->model == SG_SURFACE_ISO && cfg->iso_lod >= 0.0f)
+        snprintf(tol, sizeof tol, ", \"iso_lod\": %g", (double)cfg->iso_lod);
     if (cfg->iso_tolerance > 0)
-        snprintf(tol, sizeof tol, ", \"iso_tolerance\": %g", (double)cfg->iso_tolerance);
+        snprintf(tol + strlen(tol), sizeof tol - strlen(tol), ", \"iso_tolerance\": %g", (double)cfg->iso_tolerance);
     snprintf(out, cap,
              "\"surface\": {\"model\": \"%s\", \"samples_per_cell\": %d, \"refinements\": {\"shrink\": %s, "
              "\"encourage\": %s, \"collapse\": %s}%s}",
@@ -282,32 +289,34 @@ static int own_reference_wanted(const surf_cfg *cfgs, int i)
     for (int j = 0; j < i; j++)
         if (cfgs[j].model == cfgs[i].model)
             return 0;
-    return cfgs[i].radius_scale == 1.0f && cfgs[i].iso_tolerance == 0.0f && cfgs[i].kd_disable == 0;
+    return cfgs[i].radius_scale == 1.0f && cfgs[i].iso_tolerance == 0.0f && cfgs[i].kd_disable == 0 &&
+           cfgs[i].iso_lod == 0.0f;
 }
 
 static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_error *err)
 {
     /* The first is the yardstick (reference and direct frame) of the rest. */
     static const surf_cfg full[] = {
-        {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0},          {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0},
-        {"mls_no_shrink", SG_SURFACE_MLS, 1, 8, 1.0f, 0}, {"mls_no_collapse", SG_SURFACE_MLS, 4, 8, 1.0f, 0},
-        {"mls_spc4", SG_SURFACE_MLS, 0, 4, 1.0f, 0},     {"mls_spc16", SG_SURFACE_MLS, 0, 16, 1.0f, 0},
-        {"mls_r0.75", SG_SURFACE_MLS, 0, 8, 0.75f, 0},   {"mls_r1.5", SG_SURFACE_MLS, 0, 8, 1.5f, 0},
-        {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0},        {"disk_r0.75", SG_SURFACE_DISK, 0, 8, 0.75f, 0},
-        {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0},   {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0},
-        {"iso_tol0.02", SG_SURFACE_ISO, 0, 8, 1.0f, 0.02f}, {"iso_tol0.1", SG_SURFACE_ISO, 0, 8, 1.0f, 0.1f},
-        {"iso_r1.5", SG_SURFACE_ISO, 0, 8, 1.5f, 0}};
-    static const surf_cfg ci[] = {{"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0},
-                                  {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0},
-                                  {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0},
-                                  {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0},
-                                  {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0}};
+        {"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0, 0},          {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0, 0},
+        {"mls_no_shrink", SG_SURFACE_MLS, 1, 8, 1.0f, 0, 0}, {"mls_no_collapse", SG_SURFACE_MLS, 4, 8, 1.0f, 0, 0},
+        {"mls_spc4", SG_SURFACE_MLS, 0, 4, 1.0f, 0, 0},     {"mls_spc16", SG_SURFACE_MLS, 0, 16, 1.0f, 0, 0},
+        {"mls_r0.75", SG_SURFACE_MLS, 0, 8, 0.75f, 0, 0},   {"mls_r1.5", SG_SURFACE_MLS, 0, 8, 1.5f, 0, 0},
+        {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0, 0},        {"disk_r0.75", SG_SURFACE_DISK, 0, 8, 0.75f, 0, 0},
+        {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0, 0},   {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0, 0},
+        {"iso_tol0.02", SG_SURFACE_ISO, 0, 8, 1.0f, 0.02f, 0}, {"iso_tol0.1", SG_SURFACE_ISO, 0, 8, 1.0f, 0.1f, 0},
+        {"iso_r1.5", SG_SURFACE_ISO, 0, 8, 1.5f, 0, 0}, {"iso_lod1", SG_SURFACE_ISO, 0, 8, 1.0f, 0, 1.0f}};
+    static const surf_cfg ci[] = {{"mls", SG_SURFACE_MLS, 0, 8, 1.0f, 0, 0},
+                                  {"mls_no_refinements", SG_SURFACE_MLS, 7, 8, 1.0f, 0, 0},
+                                  {"disk", SG_SURFACE_DISK, 0, 8, 1.0f, 0, 0},
+                                  {"disk_r1.5", SG_SURFACE_DISK, 0, 8, 1.5f, 0, 0},
+                                  {"iso", SG_SURFACE_ISO, 0, 8, 1.0f, 0, 0},
+                                  {"iso_lod1", SG_SURFACE_ISO, 0, 8, 1.0f, 0, 1.0f}};
     const surf_cfg *cfgs = c->d.ci ? ci : full;
     int n = c->d.ci ? (int)(sizeof ci / sizeof ci[0]) : (int)(sizeof full / sizeof full[0]);
     vtable t = {0};
     sg_verify__tprintf(&t, "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,"
                            "frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,"
-                           "isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance\n");
+                           "isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance,iso_lod\n");
     sg_ref_result ref = {0};
     sg_image direct_ref = {0};
     double noise = 0;
@@ -374,7 +383,7 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
             for (int k = 0; k < 2 + own; k++) {
                 const sg_image_metrics *m = k == 0 ? &mb : k == 1 ? &md : &mo;
                 double fs = k == 1 ? dr.frame_s : br.frame_s;
-                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g,%g\n",
+                sg_verify__tprintf(&t, "%s,%s,%u,%d,%g,%zu,%s,%.4f,%.4f,%.6f,%.3f,%d,%.6g,%.6g,%.6g,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3g,%g,%g\n",
                                    cfg->name, sg_verify__model_name(cfg->model), cfg->kd_disable, cfg->spc,
                                    (double)cfg->radius_scale, splats,
                                    k == 0 ? "bake_lookup" : k == 1 ? "direct" : "bake_own_surface", build_s,
@@ -383,7 +392,7 @@ static sg_status part_surfaces(vctx *c, const plan *p, const mscene *ms, sg_erro
                                    per_ray(rs->nodes, rs->rays), per_ray(rs->leaves, rs->rays),
                                    per_ray(rs->isects, rs->rays), per_ray(rs->splats, rs->rays), mib,
                                    k == 0 ? noise : k == 2 ? own_noise : 0.0,
-                                   iso_tolerance(cfg));
+                                   iso_tolerance(cfg), (double)cfg->iso_lod);
                 t.rows++;
             }
             sg_verify__log(c, "  %-20s build %.2f s, bake %.2f s, lookup frame %.4f s, relMSE %.5f energy %.4f; "
@@ -576,6 +585,7 @@ static sg_status part_scaling(vctx *c, const plan *p, const mscene *ms, sg_error
         for (int m = 0; m < SG_VERIFY__MODELS && st == SG_OK; m++) {
             surf_cfg cfg = default_cfg;
             cfg.model = (sg_surface_model)m;
+            cfg.iso_lod = -1.0f; /* the frames the viewer shows */
             cfg.name = sg_verify__model_name(cfg.model);
             sg_scene_file sf = {0};
             sg_world *w = NULL;

@@ -16,7 +16,9 @@
  *              built-in bunny under the analytic sky; with `ci` always the
  *              bunny, without the ground) for each surface
  *              configuration (MLS / disks / ISO, kd-tree refinements,
- *              samples per cell, splat radius scale, ISO tolerance): one bake with fixed parameters;
+ *              samples per cell, splat radius scale, ISO tolerance, ISO
+ *              level of detail: the ISO rows trace camera rays to full
+ *              depth except iso_lod1, the viewer's default of 1 pixel): one bake with fixed parameters;
  *              its lookup frame time and error against the reference of
  *              the default MLS surface; the direct renderer's frame time,
  *              per-ray traversal counters, and its difference from the

@@ -72,15 +72,15 @@ awk -F, 'NR > 1 && $24 != "-" && $23 == "" { print "no energy against the clean 
 
 # Sweeps: the --ci plan (src/verify/sweeps.c): 5 surface configurations x
 # 2 renderers (+ disk and iso against their own reference), 7 bakes, 2 sizes x 3 models, 1 headline model.
-check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance" "1,2,7"
-[ "$(rows "$OUT/surfaces.csv")" -eq 12 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 12"
+check_csv "$OUT/surfaces.csv" "config,model,kd_disable,samples_per_cell,radius_scale,points,renderer,build_s,bake_s,frame_s,fps,frame_size,rel_mse,energy_ratio,p99,nan,nodes_per_ray,leaves_per_ray,isects_per_ray,splats_per_ray,scene_mib,ref_noise,iso_tolerance,iso_lod" "1,2,7"
+[ "$(rows "$OUT/surfaces.csv")" -eq 14 ] || fail "surfaces.csv: $(rows "$OUT/surfaces.csv") rows, want 14"
 # disk and iso (the first of their model) also against their own surface's reference
 for c in disk iso; do
   [ "$(awk -F, -v c="$c" '$1 == c && $7 == "bake_own_surface" && $13 > 0' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] ||
     fail "surfaces.csv: no $c/bake_own_surface row with an error"
 done
 [ "$(awk -F, '$7 == "bake_own_surface"' "$OUT/surfaces.csv" | wc -l)" -eq 2 ] || fail "surfaces.csv: bake_own_surface rows other than disk and iso"
-for c in mls mls_no_refinements disk disk_r1.5 iso; do
+for c in mls mls_no_refinements disk disk_r1.5 iso iso_lod1; do
   for r in bake_lookup direct; do
     [ "$(awk -F, -v c="$c" -v r="$r" '$1 == c && $7 == r' "$OUT/surfaces.csv" | wc -l)" -eq 1 ] || fail "surfaces.csv: no $c/$r row"
   done
