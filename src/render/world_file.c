@@ -13,6 +13,7 @@
  */
 #include "render/world_file.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <inttypes.h>
 #include <stdio.h>
@@ -23,6 +24,7 @@
 #include "bake/bake_file.h"
 #include "core/alloc.h"
 #include "render/world_int.h"
+#include "accel/sphere_tree.h"
 #include "surface/scene_store.h"
 
 enum { MATERIAL_WORDS = 10, WORLD_WORDS = 4 };
@@ -44,8 +46,13 @@ static sg_bake_type bake_type(sg_store_elem e)
     return e == SG_STORE_F32 ? SG_BAKE_TYPE_F32 : e == SG_STORE_U16 ? SG_BAKE_TYPE_U16 : SG_BAKE_TYPE_U32;
 }
 
-/* Nonzero (0 would skip the container's check). */
-static uint64_t param_hash(void) { return 0x5347574f524c4400ull | SG_WORLD_BUILDER_VERSION; }
+/* Nonzero (0 would skip the container's check). The sphere tree's
+ * branching factor (a build option) counts: a world of another width is
+ * stale, rebuilt by --if-stale, not corrupt. */
+static uint64_t param_hash(void)
+{
+    return 0x5347574f524c4400ull | SG_WORLD_BUILDER_VERSION | (uint64_t)SG_STREE_WIDTH << 8;
+}
 
 uint64_t sg_world_file_scene_hash(const sg_scene_file *sf) { return sg_scene_file_hash(sf, SG_SCENE_HASH_MODELS); }
 
@@ -170,13 +177,6 @@ sg_status sg_world_save(const sg_world *w, const sg_scene_file *sf, const char *
     if (w->count > SG_WORLD_MAX_MODELS)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: %zu models; a world file holds at most %u", path, w->count,
                             SG_WORLD_MAX_MODELS);
-    /* The sphere hierarchy has no store (scene_store.h) yet: refuse before
-     * anything is written, so an older file at path stays as it was. */
-    for (size_t i = 0; i < sf->model_count; ++i)
-        if (sf->models[i].surface.model == SG_SURFACE_HYBRID)
-            return sg_error_set(err, SG_ERR_UNSUPPORTED,
-                                "%s: $.models[%zu] is a hybrid model; world files hold MLS, disk and ISO models "
-                                "(build hybrid scenes from their meshes: no --world)", path, i);
     sg_status st = SG_OK;
     char *stamps = NULL;
     size_t stamps_len = 0;
@@ -191,10 +191,20 @@ sg_status sg_world_save(const sg_world *w, const sg_scene_file *sf, const char *
         goto done;
     for (size_t i = 0; i < w->count; ++i)
         encode_material(&w->materials[i], mat + MATERIAL_WORDS * i);
+    /* The table holds the sections written, not every array a surface
+     * might hold: 3 + models x (1 + the arrays each holds), at most
+     * 3 + SG_WORLD_MAX_MODELS x 25 (MLS). */
+    size_t sections = 3;
+    for (size_t i = 0; i < w->count; ++i) {
+        sg_scene_store_of(w->scenes[i], store);
+        sections++;
+        for (int a = 0; a < SG_SA_COUNT; ++a)
+            sections += store->data[a] != NULL;
+    }
+    assert(sections <= SG_BAKE_MAX_SECTIONS);
     uint64_t head[WORLD_WORDS] = {w->count, SG_WORLD_BUILDER_VERSION, 0, 0};
     sg_bake_writer_desc wd = {.path = path, .scene_hash = sg_world_file_scene_hash(sf), .param_hash = param_hash(),
-                              .max_sections = 3 + (uint32_t)w->count * (1 + SG_SA_COUNT),
-                              .kind = SG_BAKE_KIND_WORLD};
+                              .max_sections = (uint32_t)sections, .kind = SG_BAKE_KIND_WORLD};
     if ((st = sg_bake_writer_create(&wd, &wr, err)) != SG_OK ||
         (st = sg_bake_writer_add_section(wr, "WRLD", SG_BAKE_TYPE_U64, WORLD_WORDS, head, err)) != SG_OK ||
         (st = sg_bake_writer_add_section(wr, "MATL", SG_BAKE_TYPE_U32, MATERIAL_WORDS * w->count, mat, err)) !=

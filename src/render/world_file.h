@@ -4,7 +4,10 @@
  * What it does: sg_world_save writes what sg_world_create built for each
  * model — the point set (positions, normals, radii, colours), the surface
  * with its hierarchy (MLS and disks: the SAH kd-tree and its per-leaf
- * splat arrays with the MLS layer keys; ISO: the octree with its corners),
+ * splat arrays with the MLS layer keys; ISO: the octree with its corners;
+ * hybrid: no point set, but the sphere tree's node bundles and node
+ * colours, the triangles in leaf order, the vertices, vertex normals and
+ * colours),
  * the surface options and build facts, and the material — into the
  * .sgbake container (bake/bake_file.h, kind SG_BAKE_KIND_WORLD: versioned
  * header, CRC-32 per section, written to a temporary file and renamed).
@@ -22,9 +25,12 @@
  *  - scene hash = sg_scene_file_hash(sf, SG_SCENE_HASH_MODELS): model
  *    paths, transforms, point options, surface options, materials; the
  *    envmap, cameras and render settings do not count;
- *  - parameter hash = SG_WORLD_BUILDER_VERSION hashed: raised whenever a
- *    build (sampling, kd-tree, ISO, layer keys) changes what it makes, so
- *    an old file is rebuilt instead of silently differing from a build;
+ *  - parameter hash = SG_WORLD_BUILDER_VERSION and the sphere tree's
+ *    width (SG_STREE_WIDTH) hashed: the version is raised whenever a
+ *    build (sampling, kd-tree, ISO, sphere tree, layer keys) or the
+ *    layout of the stored arrays changes, so an old file is rebuilt
+ *    instead of silently differing from a build (version 2: hybrid models
+ *    stored, 128 scalars per model);
  *  - input stamps: size and modification time (ns) of every file the
  *    models read (model files, the bunny asset), kept in the file. Not
  *    content hashes: hashing a 24M-point model costs as much as reading
@@ -67,8 +73,8 @@
 #include "io/scene_file.h"
 #include "render/world.h"
 
-#define SG_WORLD_BUILDER_VERSION 1u /* raise when a build changes its output */
-#define SG_WORLD_MAX_MODELS 160u    /* 25 sections per model in 4096         */
+#define SG_WORLD_BUILDER_VERSION 2u /* raise when a build changes its output */
+#define SG_WORLD_MAX_MODELS 160u    /* 25 sections per model (MLS) in 4096   */
 
 /* The scene hash a world file of sf carries (see above). */
 uint64_t sg_world_file_scene_hash(const sg_scene_file *sf);

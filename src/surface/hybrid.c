@@ -52,6 +52,10 @@ void sg_hybrid_destroy(sg_hybrid *h)
 {
     if (!h)
         return;
+    if (h->borrowed) { /* the arrays are a world file's (hybrid_int.h) */
+        sg_free(h);
+        return;
+    }
     sg_stree_free(&h->tree);
     sg_free(h->tri);
     sg_free(h->tri_id);

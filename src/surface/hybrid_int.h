@@ -9,6 +9,9 @@
  *     vertex_count oct-encoded unit normals (oct.h);
  *  3. tree satisfies sphere_tree.h's invariants over exactly these
  *     triangles (tree.order is released once tri/tri_id are made).
+ * A hierarchy loaded from a world file (scene_store.c) has been checked
+ * for everything a traversal indexes with (child words, leaf ranges,
+ * vertex ids, depth) and for NaN, not for invariant 1's tightness.
  */
 #ifndef SG_SURFACE_HYBRID_INT_H
 #define SG_SURFACE_HYBRID_INT_H
@@ -27,6 +30,9 @@ struct sg_hybrid {
     size_t vertex_count;
     float self_eps;        /* self_r of rays spawned at triangle hits        */
     sg_hybrid_info info;
+    int borrowed;          /* 1: tree.bundles, tree.colors, tri, tri_id, pos,
+                              vnormal, vcolor belong to a world file's map
+                              (scene_store.c); destroy frees the struct only */
 };
 
 #endif

@@ -21,17 +21,18 @@ struct sg_scene {
     sg_iso *iso;          /* SG_SURFACE_ISO: the octree (no kd-tree then)   */
     sg_iso_sites iso_sites; /* ...and its corners as light sites            */
     sg_hybrid *hybrid;    /* SG_SURFACE_HYBRID: the sphere hierarchy (no
-                             kd-tree, no points; not kept in world files) */
+                             kd-tree, no points)                          */
     sg_hybrid_sites hybrid_sites; /* ...its vertices and nodes as sites     */
     sg_kdtree tree;
     sg_splat_soa soa;     /* one entry per reference, leaf by leaf          */
     sg_mls_params mls;
     sg_scene_info info;
-    int borrowed;         /* 1: points, tree, soa (and the ISO's arrays)
+    int borrowed;         /* 1: points, tree, soa (and the ISO's and the
+                             hybrid's arrays)
                              point into memory the scene does not own (a
                              world file's map, scene_store.c); destroy
                              frees only what it allocated: the struct, the
-                             ISO struct and the ISO sites                 */
+                             ISO and hybrid structs and their sites       */
 };
 
 /* Deepest kd-tree a scene traverses: the traversal's fixed stack holds

@@ -3,9 +3,10 @@
  * Invariants:
  *  1. one function, scalars(), walks the scalar fields in one order for
  *     both directions, so saving and loading cannot disagree on a slot;
- *  2. a scene from sg_scene_from_store has borrowed = 1 (so has its ISO):
- *     its points, tree, soa and octree arrays are the caller's, read-only;
- *     every derived pointer (sites, mls) is set as sg_scene_create sets it;
+ *  2. a scene from sg_scene_from_store has borrowed = 1 (so has its ISO or
+ *     hybrid): its points, tree, soa, octree and sphere-tree arrays are the
+ *     caller's, read-only; every derived pointer (sites, mls) is set as
+ *     sg_scene_create (sg_scene_create_mesh) sets it;
  *  3. nothing read from the store reaches an assert or an index before the
  *     check that bounds it (checks run in the order the data is used).
  */
@@ -18,6 +19,7 @@
 #include <string.h>
 
 #include "core/alloc.h"
+#include "surface/hybrid_int.h"
 #include "surface/iso_int.h"
 #include "surface/scene_int.h"
 
@@ -36,6 +38,11 @@ static const sg_scene_array_spec SPECS[SG_SA_COUNT] = {
     [SG_SA_SOA_ID] = {"SD", SG_STORE_U32, 1},      [SG_SA_SOA_KEY] = {"SK", SG_STORE_U32, 1},
     [SG_SA_ISO_NODES] = {"ON", SG_STORE_U32, 9},   [SG_SA_ISO_LEAVES] = {"OL", SG_STORE_U32, 9},
     [SG_SA_ISO_CF] = {"OF", SG_STORE_U16, 1},      [SG_SA_ISO_CN] = {"OC", SG_STORE_U32, 1},
+    [SG_SA_HY_BUNDLES] = {"YB", SG_STORE_U32, sizeof(sg_stree_bundle) / 4},
+    [SG_SA_HY_NODE_COLOR] = {"YC", SG_STORE_F32, 3},
+    [SG_SA_HY_TRI] = {"YT", SG_STORE_U32, 3},      [SG_SA_HY_TRI_ID] = {"YI", SG_STORE_U32, 1},
+    [SG_SA_HY_POS] = {"YP", SG_STORE_F32, 3},      [SG_SA_HY_NORMAL] = {"YN", SG_STORE_U32, 1},
+    [SG_SA_HY_COLOR] = {"YV", SG_STORE_F32, 3},
 };
 
 /* The stored structs are these many elements, with no padding the
@@ -45,6 +52,10 @@ _Static_assert(sizeof(sg_aabb) == 24, "sg_aabb: 6 x f32");
 _Static_assert(sizeof(iso_node) == 36, "iso_node: 9 x u32 (with its iso_lod)");
 _Static_assert(sizeof(iso_lod) == 24, "iso_lod: 6 x u32");
 _Static_assert(sizeof(iso_leaf) == 36, "iso_leaf: 9 x u32");
+/* A bundle has padding after its int8 fields (216 of 256 bytes at width
+ * 8): sphere_tree.c's bundle_clear zeroes it, so the file and the
+ * checksums see zeros, never garbage. */
+_Static_assert(sizeof(sg_stree_bundle) % 4 == 0, "sg_stree_bundle: whole u32 words");
 
 const sg_scene_array_spec *sg_scene_array_spec_of(sg_scene_array_id id)
 {
@@ -111,9 +122,11 @@ static void c_box(codec *c, sg_aabb *b)
     c_vec3(c, &b->hi);
 }
 
-/* Every scalar of the scene (and of its ISO when iso is not NULL). The
- * enum fields go through int, whatever their storage. */
-static void scalars(codec *c, sg_scene *sc, sg_iso *iso)
+/* Every scalar of the scene, of its ISO and of its hybrid hierarchy (the
+ * two zeroed when the scene has none: their slots are always there, so
+ * the hybrid's do not move with the surface). The enum fields go through
+ * int, whatever their storage. 105 slots. */
+static void scalars(codec *c, sg_scene *sc, sg_iso *iso, sg_hybrid *hy)
 {
     sg_scene_desc *d = &sc->desc;
     int e = (int)d->model;
@@ -156,8 +169,6 @@ static void scalars(codec *c, sg_scene *sc, sg_iso *iso)
     c_f64(c, &in->build_seconds);
     c_box(c, &in->bounds);
     c_f32(c, &in->diagonal);
-    if (!iso)
-        return;
     c_vec3(c, &iso->lo);
     c_f32(c, &iso->edge);
     c_f32(c, &iso->unit);
@@ -180,6 +191,46 @@ static void scalars(codec *c, sg_scene *sc, sg_iso *iso)
     c_f32(c, &ii->f_scale);
     c_f32(c, &ii->r_min);
     c_f32(c, &ii->r_max);
+
+    c_f32(c, &d->hybrid_lod); /* a query setting, as iso_lod */
+    sg_hybrid_desc *hd = &hy->desc;
+    u = hd->flags;
+    c_u64(c, &u);
+    hd->flags = (uint32_t)u;
+    e = (int)hd->traversal;
+    c_int(c, &e);
+    hd->traversal = (sg_hybrid_traversal)e;
+    c_int(c, &hd->leaf_max);
+    c_int(c, &hd->threads);
+    c_size(c, &hy->vertex_count);
+    c_f32(c, &hy->self_eps);
+    sg_stree *st = &hy->tree;
+    c_size(c, &st->bundle_count);
+    c_size(c, &st->triangle_count);
+    c_size(c, &st->node_count);
+    c_size(c, &st->leaf_count);
+    c_int(c, &st->depth);
+    sg_hybrid_info *hi = &hy->info;
+    c_size(c, &hi->input_triangles);
+    c_size(c, &hi->triangle_count);
+    c_size(c, &hi->degenerate_count);
+    c_size(c, &hi->vertex_count);
+    c_size(c, &hi->node_count);
+    c_size(c, &hi->leaf_count);
+    c_size(c, &hi->node_slots);
+    c_int(c, &hi->width);
+    c_int(c, &hi->leaf_max);
+    c_int(c, &hi->depth);
+    c_size(c, &hi->memory_bytes);
+    c_size(c, &hi->memory_nodes);
+    c_size(c, &hi->memory_triangles);
+    c_size(c, &hi->memory_vertices);
+    c_size(c, &hi->memory_normals);
+    c_size(c, &hi->memory_colors);
+    c_f64(c, &hi->bytes_per_triangle);
+    c_f64(c, &hi->build_seconds);
+    c_box(c, &hi->bounds);
+    c_f32(c, &hi->diagonal);
 }
 
 /* ---- save ------------------------------------------------------------------ */
@@ -196,16 +247,37 @@ void sg_scene_store_of(const sg_scene *sc, sg_scene_store *out)
     memset(out, 0, sizeof *out);
     sg_scene copy = *sc; /* shallow: scalars() reads fields only when saving */
     sg_iso iso_copy;
+    sg_hybrid hy_copy;
     memset(&iso_copy, 0, sizeof iso_copy);
+    memset(&hy_copy, 0, sizeof hy_copy);
     if (sc->iso)
         iso_copy = *sc->iso;
+    if (sc->hybrid)
+        hy_copy = *sc->hybrid;
     /* The only value that differs between two builds of one scene: left
      * out, so a world file is a function of its scene (DESIGN.md
      * "Determinism"); a loaded scene says 0 s (it was not built). */
     copy.info.build_seconds = 0.0;
     iso_copy.info.build_seconds = 0.0;
+    hy_copy.info.build_seconds = 0.0;
     codec c = {.slot = out->scalars};
-    scalars(&c, &copy, sc->iso ? &iso_copy : NULL);
+    scalars(&c, &copy, &iso_copy, &hy_copy);
+    assert(c.n <= SG_SCENE_SCALARS);
+
+    if (sc->hybrid) { /* no point set, no kd-tree */
+        const sg_hybrid *h = sc->hybrid;
+        put(out, SG_SA_HY_BUNDLES, h->tree.bundles, h->tree.bundle_count);
+        if (h->tree.colors)
+            put(out, SG_SA_HY_NODE_COLOR, h->tree.colors, h->info.node_slots);
+        put(out, SG_SA_HY_TRI, h->tri, h->info.triangle_count);
+        put(out, SG_SA_HY_TRI_ID, h->tri_id, h->info.triangle_count);
+        put(out, SG_SA_HY_POS, h->pos, h->vertex_count);
+        if (h->vnormal)
+            put(out, SG_SA_HY_NORMAL, h->vnormal, h->vertex_count);
+        if (h->vcolor)
+            put(out, SG_SA_HY_COLOR, h->vcolor, h->vertex_count);
+        return;
+    }
 
     const sg_pointset *p = &sc->points;
     size_t n = p->count;
@@ -253,7 +325,8 @@ static sg_status need(const sg_scene_store *in, sg_scene_array_id id, uint64_t w
 static sg_status check_desc(const sg_scene *sc, const char *label, sg_error *err)
 {
     const sg_scene_desc *d = &sc->desc;
-    if (d->model != SG_SURFACE_MLS && d->model != SG_SURFACE_DISK && d->model != SG_SURFACE_ISO)
+    if (d->model != SG_SURFACE_MLS && d->model != SG_SURFACE_DISK && d->model != SG_SURFACE_ISO &&
+        d->model != SG_SURFACE_HYBRID)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: unknown surface model %d", label, (int)d->model);
     if (d->kernel != SG_KERNEL_HAT && d->kernel != SG_KERNEL_GAUSSIAN)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: unknown kernel %d", label, (int)d->kernel);
@@ -263,6 +336,12 @@ static sg_status check_desc(const sg_scene *sc, const char *label, sg_error *err
                             "%s: surface options out of range (samples %d, spacing %g, depth %d, blend %g)", label,
                             d->samples_per_cell, (double)d->max_sample_spacing, d->max_depth,
                             (double)d->blend_depth);
+    if (d->model == SG_SURFACE_HYBRID) {
+        if (sc->points.count != 0)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: %zu splats on a hybrid surface (expected none)", label,
+                                sc->points.count);
+        return SG_OK;
+    }
     if (sc->points.count == 0 || sc->points.count > UINT32_MAX - 1)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: %zu splats (expected 1 .. 2^32 - 2)", label, sc->points.count);
     return SG_OK;
@@ -433,6 +512,205 @@ static sg_status check_colours(const sg_pointset *p, const char *label, sg_error
     return SG_OK;
 }
 
+/* ---- load: the hybrid hierarchy --------------------------------------------- */
+
+/* The hierarchy's scalars against each other and this build. */
+static sg_status check_hybrid_header(const sg_hybrid *h, const char *label, sg_error *err)
+{
+    const sg_hybrid_info *in = &h->info;
+    const sg_stree *t = &h->tree;
+    if (in->width != SG_STREE_WIDTH)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: sphere tree of %d children per node; this build traces %d (SG_HYBRID_WIDTH)", label,
+                            in->width, SG_STREE_WIDTH);
+    if ((h->desc.flags & ~(uint32_t)(SG_HYBRID_CULL_BACKFACES | SG_HYBRID_FLAT_SHADING)) ||
+        (h->desc.traversal != SG_HYBRID_TRAVERSE_STACK && h->desc.traversal != SG_HYBRID_TRAVERSE_HEAP) ||
+        h->desc.leaf_max < 1 || h->desc.leaf_max > SG_STREE_MAX_LEAF || h->desc.leaf_max != in->leaf_max ||
+        h->desc.threads < 0)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid options out of range (flags 0x%x, traversal %d, leaf max %d)",
+                            label, h->desc.flags, (int)h->desc.traversal, h->desc.leaf_max);
+    if (h->vertex_count == 0 || h->vertex_count >= SG_INVALID_ID || in->vertex_count != h->vertex_count ||
+        t->triangle_count == 0 || t->triangle_count > SG_STREE_MAX_TRIANGLES ||
+        in->triangle_count != t->triangle_count || in->input_triangles < in->triangle_count ||
+        in->input_triangles > UINT32_MAX || in->degenerate_count != in->input_triangles - in->triangle_count)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: hybrid counts out of range (%zu vertices, %zu of %zu triangles traced, %zu degenerate)",
+                            label, h->vertex_count, t->triangle_count, in->input_triangles, in->degenerate_count);
+    if (t->bundle_count == 0 || t->bundle_count > SG_STREE_LEAF / SG_STREE_WIDTH ||
+        in->node_slots != t->bundle_count * SG_STREE_WIDTH || in->node_count != t->node_count ||
+        in->leaf_count != t->leaf_count || in->depth != t->depth || t->depth < 1 || t->depth > SG_STREE_MAX_DEPTH)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: sphere tree header out of range (%zu bundles, %zu node slots, %zu nodes, depth %d)",
+                            label, t->bundle_count, in->node_slots, t->node_count, t->depth);
+    if (!(h->self_eps > 0.0f) || !isfinite(h->self_eps) || !isfinite(in->diagonal) || box_has_nan(&in->bounds))
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid scalars not finite (self epsilon %g, diagonal %g)", label,
+                            (double)h->self_eps, (double)in->diagonal);
+    return SG_OK;
+}
+
+/* Every bundle: reached once from an earlier one within the depth limit,
+ * lanes empty or finite with a child word in range; the counts of nodes,
+ * leaves and the depth as stored. What the traversal indexes with. */
+static sg_status check_stree(const sg_stree *t, const char *label, sg_error *err)
+{
+    uint8_t *level = sg_calloc_array(t->bundle_count, 1);
+    if (!level)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory checking %zu sphere-tree bundles", label,
+                            t->bundle_count);
+    sg_status st = SG_OK;
+    size_t nodes = 0, leaves = 0;
+    int depth = 0;
+    level[0] = 1; /* the root bundle; level = bundles from it */
+    for (size_t b = 0; b < t->bundle_count && st == SG_OK; ++b) {
+        const sg_stree_bundle *B = &t->bundles[b];
+        if (level[b] == 0) {
+            st = sg_error_set(err, SG_ERR_CORRUPT, "%s: sphere-tree bundle %zu: no inner node reaches it", label, b);
+            break;
+        }
+        for (int l = 0; l < SG_STREE_WIDTH && st == SG_OK; ++l) {
+            const size_t k = b * SG_STREE_WIDTH + (size_t)l;
+            const uint32_t word = B->child[l];
+            const float r = B->r[l];
+            if (word == SG_STREE_EMPTY || (b == 0 && l > 0)) {
+                /* an empty lane misses every sphere test only with NaN */
+                if (word != SG_STREE_EMPTY || !isnan(r))
+                    st = sg_error_set(err, SG_ERR_CORRUPT,
+                                      "%s: sphere-tree node %zu: an empty lane with child 0x%08" PRIx32 " radius %g",
+                                      label, k, word, (double)r);
+                continue;
+            }
+            if (!(r > 0.0f) || !isfinite(r) || !isfinite(B->cx[l]) || !isfinite(B->cy[l]) || !isfinite(B->cz[l])) {
+                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: sphere-tree node %zu: sphere (%g %g %g) radius %g", label, k,
+                                  (double)B->cx[l], (double)B->cy[l], (double)B->cz[l], (double)r);
+                continue;
+            }
+            nodes++;
+            if (sg_stree_is_leaf(word)) {
+                uint64_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+                if (first + count > t->triangle_count)
+                    st = sg_error_set(err, SG_ERR_CORRUPT,
+                                      "%s: sphere-tree node %zu: leaf triangles %" PRIu64 "..%" PRIu64 " past %zu", label,
+                                      k, first, first + count - 1, t->triangle_count);
+                leaves++;
+                depth = level[b] > depth ? level[b] : depth;
+            } else if (word <= b || word >= t->bundle_count) {
+                st = sg_error_set(err, SG_ERR_CORRUPT,
+                                  "%s: sphere-tree node %zu: children bundle %" PRIu32 " is not after it within %zu "
+                                  "bundles",
+                                  label, k, word, t->bundle_count);
+            } else if (level[word]) {
+                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: sphere-tree bundle %" PRIu32 ": reached twice", label,
+                                  word);
+            } else if (level[b] >= SG_STREE_MAX_DEPTH) {
+                st = sg_error_set(err, SG_ERR_CORRUPT, "%s: sphere-tree node %zu: children deeper than %d bundles",
+                                  label, k, SG_STREE_MAX_DEPTH);
+            } else {
+                level[word] = (uint8_t)(level[b] + 1);
+            }
+        }
+    }
+    sg_free(level);
+    if (st != SG_OK)
+        return st;
+    if (nodes != t->node_count || leaves != t->leaf_count || depth != t->depth)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: sphere tree holds %zu nodes, %zu leaves, depth %d; its header says %zu, %zu, %d",
+                            label, nodes, leaves, depth, t->node_count, t->leaf_count, t->depth);
+    return SG_OK;
+}
+
+/* Floats all finite: "<label>: <what> <item> is not finite". */
+static sg_status check_finite(const float *f, size_t items, size_t per, const char *what, const char *label,
+                              sg_error *err)
+{
+    for (size_t i = 0; i < items * per; ++i)
+        if (!isfinite(f[i]))
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: %s %zu is not finite", label, what, i / per);
+    return SG_OK;
+}
+
+/* Triangles in leaf order: vertex ids in range, non-zero area in double
+ * (hybrid_int.h invariant 1: a traced triangle has a normal), input
+ * index in range. */
+static sg_status check_triangles(const sg_hybrid *h, const char *label, sg_error *err)
+{
+    for (size_t i = 0; i < h->info.triangle_count; ++i) {
+        const uint32_t *v = h->tri + 3 * i;
+        if (v[0] >= h->vertex_count || v[1] >= h->vertex_count || v[2] >= h->vertex_count)
+            return sg_error_set(err, SG_ERR_CORRUPT,
+                                "%s: hybrid triangle %zu: vertices %" PRIu32 " %" PRIu32 " %" PRIu32 " of %zu", label, i,
+                                v[0], v[1], v[2], h->vertex_count);
+        if (h->tri_id[i] >= h->info.input_triangles)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid triangle %zu: input index %" PRIu32 " of %zu", label,
+                                i, h->tri_id[i], h->info.input_triangles);
+        const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
+        double e1[3] = {(double)b[0] - a[0], (double)b[1] - a[1], (double)b[2] - a[2]};
+        double e2[3] = {(double)c[0] - a[0], (double)c[1] - a[1], (double)c[2] - a[2]};
+        if (e1[1] * e2[2] - e1[2] * e2[1] == 0.0 && e1[2] * e2[0] - e1[0] * e2[2] == 0.0 &&
+            e1[0] * e2[1] - e1[1] * e2[0] == 0.0)
+            return sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid triangle %zu: zero area", label, i);
+    }
+    return SG_OK;
+}
+
+/* Optional array id: present with want items when `has`, absent when not. */
+static sg_status need_if(const sg_scene_store *in, sg_scene_array_id id, int has, uint64_t want, const char *label,
+                         sg_error *err)
+{
+    if (has)
+        return need(in, id, want, label, err);
+    if (in->data[id])
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: array %s on a hybrid surface that has none", label,
+                            SPECS[id].code);
+    return SG_OK;
+}
+
+/* sc->hybrid over in's arrays, checked; then its light sites (made, as
+ * sg_scene_create_mesh makes them). */
+static sg_status load_hybrid(const sg_scene_store *in, sg_scene *sc, const char *label, sg_error *err)
+{
+    sg_hybrid *h = sc->hybrid;
+    sg_status st = check_hybrid_header(h, label, err);
+    if (st != SG_OK)
+        return st;
+    const int colours = in->data[SG_SA_HY_COLOR] != NULL;
+    const size_t nv = h->vertex_count, nt = h->tree.triangle_count;
+    if ((st = need(in, SG_SA_HY_BUNDLES, h->tree.bundle_count, label, err)) != SG_OK ||
+        (st = need_if(in, SG_SA_HY_NODE_COLOR, colours, h->info.node_slots, label, err)) != SG_OK ||
+        (st = need(in, SG_SA_HY_TRI, nt, label, err)) != SG_OK ||
+        (st = need(in, SG_SA_HY_TRI_ID, nt, label, err)) != SG_OK ||
+        (st = need(in, SG_SA_HY_POS, nv, label, err)) != SG_OK ||
+        (st = need_if(in, SG_SA_HY_NORMAL, !(h->desc.flags & SG_HYBRID_FLAT_SHADING), nv, label, err)) != SG_OK ||
+        (st = need_if(in, SG_SA_HY_COLOR, colours, nv, label, err)) != SG_OK)
+        return st;
+    h->tree.bundles = (sg_stree_bundle *)in->data[SG_SA_HY_BUNDLES];
+    h->tree.colors = (float *)in->data[SG_SA_HY_NODE_COLOR];
+    h->tri = (uint32_t *)in->data[SG_SA_HY_TRI];
+    h->tri_id = (uint32_t *)in->data[SG_SA_HY_TRI_ID];
+    h->pos = (float *)in->data[SG_SA_HY_POS];
+    h->vnormal = (uint32_t *)in->data[SG_SA_HY_NORMAL]; /* any word decodes to a unit vector (oct.h) */
+    h->vcolor = (float *)in->data[SG_SA_HY_COLOR];
+    if ((st = check_finite(h->pos, nv, 3, "hybrid vertex", label, err)) != SG_OK ||
+        (colours && (st = check_finite(h->vcolor, nv, 3, "hybrid vertex colour", label, err)) != SG_OK) ||
+        (colours &&
+         (st = check_finite(h->tree.colors, h->info.node_slots, 3, "sphere-tree node colour", label, err)) !=
+             SG_OK) ||
+        (st = check_stree(&h->tree, label, err)) != SG_OK || (st = check_triangles(h, label, err)) != SG_OK)
+        return st;
+    float lod = sc->desc.hybrid_lod;
+    if (!isfinite(lod))
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid level of detail %g is not finite", label, (double)lod);
+    if ((st = sg_hybrid_sites_create(h, &sc->hybrid_sites, err)) != SG_OK) {
+        if (st == SG_ERR_NOMEM)
+            return st;
+        char why[SG_ERROR_MESSAGE_MAX];
+        snprintf(why, sizeof why, "%s", err ? err->message : "");
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: %s", label, why);
+    }
+    sc->sites = sc->hybrid_sites.view;
+    return SG_OK;
+}
+
 /* ---- load ------------------------------------------------------------------ */
 
 sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, const sg_scene_desc *query,
@@ -442,24 +720,42 @@ sg_status sg_scene_from_store(const sg_scene_store *in, const char *label, const
     sg_status st = SG_OK;
     sg_scene *sc = sg_calloc_array(1, sizeof *sc);
     sg_iso *iso = sg_calloc_array(1, sizeof *iso);
-    if (!sc || !iso) {
+    sg_hybrid *hy = sg_calloc_array(1, sizeof *hy);
+    if (!sc || !iso || !hy) {
         sg_free(sc);
         sg_free(iso);
+        sg_free(hy);
         return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory", label);
     }
     sc->borrowed = 1; /* invariant 2: from here on destroy frees no array */
     iso->borrowed = 1;
+    hy->borrowed = 1;
     codec c = {.slot = (uint64_t *)in->scalars, .load = 1};
-    scalars(&c, sc, iso);
+    scalars(&c, sc, iso, hy);
     if (sc->desc.model == SG_SURFACE_ISO)
         sc->iso = iso;
     else
         sg_free(iso);
     iso = NULL;
-    if (query)
+    if (sc->desc.model == SG_SURFACE_HYBRID)
+        sc->hybrid = hy;
+    else
+        sg_free(hy);
+    hy = NULL;
+    if (query) {
         sc->desc.iso_lod = query->iso_lod;
+        /* with the default filled in as sg_scene_create* does for every
+         * model, so a saved world stays a function of its scene */
+        sc->desc.hybrid_lod = query->hybrid_lod == 0.0f ? SG_HYBRID_LOD_DEFAULT : query->hybrid_lod;
+    }
     if ((st = check_desc(sc, label, err)) != SG_OK)
         goto fail;
+    if (sc->hybrid) {
+        if ((st = load_hybrid(in, sc, label, err)) != SG_OK)
+            goto fail;
+        *out = sc;
+        return SG_OK;
+    }
 
     size_t n = sc->points.count;
     for (int a = SG_SA_PX; a <= SG_SA_AB; ++a)

@@ -8,8 +8,12 @@
  * puts a scene together again over such arrays WITHOUT copying them: the
  * scene borrows them (a read-only map of the world file), so a loaded scene
  * holds the very bytes the built one held and answers every query with the
- * same bits. Only the ISO's light sites are recomputed (a pass over the
- * leaves, sg_iso_sites_create, deterministic), not stored.
+ * same bits. Or the hybrid point/triangle hierarchy (hybrid.h): its node
+ * bundles and node colours, the triangles in leaf order with their input
+ * indices, the vertex positions, normals and colours. Only light sites
+ * are recomputed, not stored: the ISO's (a pass over the leaves,
+ * sg_iso_sites_create) and the hybrid's (a pass over vertices and nodes,
+ * sg_hybrid_sites_create); both deterministic, so the same bits.
  * The build's wall time is stored as 0 (a loaded scene's info says 0 s):
  * it is the one value two builds of a scene differ in, so the store, and
  * the world file, are a function of the scene.
@@ -29,7 +33,19 @@
  * for the ISO every node (masks consistent, children after their parent,
  * each reached once, within max_depth, ranges inside the arrays) and leaf
  * (corners and splat in range) and its scalars (finite, unit = edge /
- * 2^max_depth). Any failure is SG_ERR_CORRUPT naming label, the array and
+ * 2^max_depth); for the hybrid (no point set) the branching factor
+ * (equal to this build's SG_STREE_WIDTH), every bundle (the root bundle's
+ * lanes past 0 empty; each other bundle reached from exactly one inner
+ * lane of an earlier bundle, within SG_STREE_MAX_DEPTH; empty lanes with
+ * NaN radius and the empty child word, others with a finite centre, a
+ * finite radius > 0 and a child word that is an earlier-reached bundle or
+ * a leaf range inside the triangles), the node, leaf and depth counts
+ * against the bundles, every triangle's vertex ids (< vertex count) and
+ * non-zero area, its input index (< input triangles), positions and
+ * colours finite, and its scalars (self epsilon, counts, info). Not
+ * checked: that each sphere really holds its triangles (a wrong one misses
+ * hits, never reads out of bounds). Any failure is SG_ERR_CORRUPT naming
+ * label, the array and
  * the element: "w.sgworld: model 0: kd-tree node 17: child 9 is not after
  * its parent".
  *
@@ -46,7 +62,8 @@
 
 /* Every array a scene may hold; which ones a surface uses: MLS all of
  * POINTS..SOA_KEY but the ISO's, DISK the same without SOA_KEY, ISO the
- * point set and ISO_*. */
+ * point set and ISO_*, HYBRID only HY_* (HY_NODE_COLOR and HY_COLOR when
+ * the mesh had colours, HY_NORMAL unless flat shaded). */
 typedef enum sg_scene_array_id {
     SG_SA_PX, SG_SA_PY, SG_SA_PZ, SG_SA_NX, SG_SA_NY, SG_SA_NZ, SG_SA_RADIUS, SG_SA_AR, SG_SA_AG,
     SG_SA_AB,                                                         /* point set, count = splats  */
@@ -54,6 +71,8 @@ typedef enum sg_scene_array_id {
     SG_SA_SOA_PX, SG_SA_SOA_PY, SG_SA_SOA_PZ, SG_SA_SOA_NX, SG_SA_SOA_NY, SG_SA_SOA_NZ, SG_SA_SOA_R,
     SG_SA_SOA_INV_R, SG_SA_SOA_ID, SG_SA_SOA_KEY,                     /* sg_splat_soa, count = refs */
     SG_SA_ISO_NODES, SG_SA_ISO_LEAVES, SG_SA_ISO_CF, SG_SA_ISO_CN,   /* the octree (iso_int.h)     */
+    SG_SA_HY_BUNDLES, SG_SA_HY_NODE_COLOR,                           /* sg_stree (sphere_tree.h)   */
+    SG_SA_HY_TRI, SG_SA_HY_TRI_ID, SG_SA_HY_POS, SG_SA_HY_NORMAL, SG_SA_HY_COLOR, /* hybrid_int.h */
     SG_SA_COUNT
 } sg_scene_array_id;
 
@@ -76,7 +95,7 @@ const sg_scene_array_spec *sg_scene_array_spec_of(sg_scene_array_id id);
 /* Bytes of one element of type e (4 or 2). */
 uint32_t sg_store_elem_size(sg_store_elem e);
 
-#define SG_SCENE_SCALARS 64 /* u64 slots; floats as their bits (scene_store.c) */
+#define SG_SCENE_SCALARS 128 /* u64 slots; floats as their bits (scene_store.c) */
 
 typedef struct sg_scene_store {
     uint64_t scalars[SG_SCENE_SCALARS];     /* desc, counts, build facts      */

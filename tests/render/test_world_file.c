@@ -17,7 +17,10 @@
 #include <zlib.h>
 
 #include "accel/kdtree.h"
+#include "accel/sphere_tree.h"
+#include "bake/bake.h"
 #include "bake/bake_file.h"
+#include "bake/bake_io.h"
 #include "core/alloc.h"
 #include "io/scene_file.h"
 #include "render/camera.h"
@@ -335,29 +338,235 @@ static void test_world_file_failed_save(void **state)
     sg_scene_file_free(&other);
 }
 
-/* 7b. A hybrid model has no store: the save is refused with a message
- * naming the model, and the file already at the path is left whole. */
-static void test_world_file_hybrid_refused(void **state)
+/* ---- hybrid models (surface/hybrid.h) ------------------------------------ */
+
+/* A cube of 8 coloured vertices (so the vertex and node colour arrays are
+ * stored too): ASCII PLY, 12 triangles. */
+static const char CUBE_PLY[] =
+    "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+    "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 12\n"
+    "property list uchar int vertex_indices\nend_header\n"
+    "-1 -1 -1 255 0 0\n1 -1 -1 0 255 0\n1 1 -1 0 0 255\n-1 1 -1 255 255 0\n"
+    "-1 -1 1 255 0 255\n1 -1 1 0 255 255\n1 1 1 255 255 255\n-1 1 1 40 40 40\n"
+    "3 0 3 2\n3 0 2 1\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n"
+    "3 3 7 6\n3 3 6 2\n3 0 4 7\n3 0 7 3\n3 1 2 6\n3 1 6 5\n";
+
+/* The mixed scene: an MLS sphere, a hybrid ground, a hybrid sphere (4096
+ * triangles, fine enough for level-of-detail hits) and a hybrid coloured
+ * cube from a file; in *sf, its world built in *w and saved to path. */
+static void hybrid_world(sg_scene_file *sf, sg_world **w, char *path, size_t path_size)
+{
+    const char *ply = sg_test_write_file("cube.ply", CUBE_PLY, sizeof CUBE_PLY - 1);
+    char json[4800];
+    snprintf(json, sizeof json,
+             "{\"models\": [{\"builtin\": \"sphere\", \"points\": 3000, \"material\": {\"albedo\": [0.7, 0.6, 0.5]}},"
+             " {\"builtin\": \"ground\", \"points\": 400, \"transform\": {\"translate\": [0, -1, 0]},"
+             "  \"surface\": {\"model\": \"hybrid\"}, \"material\": {\"type\": \"ggx\", \"roughness\": 0.4}},"
+             " {\"builtin\": \"sphere\", \"points\": 2000, \"transform\": {\"translate\": [2.5, 0, 0]},"
+             "  \"surface\": {\"model\": \"hybrid\"}},"
+             " {\"path\": \"%s\", \"transform\": {\"translate\": [1.2, 0.4, -0.9], \"scale\": 0.35},"
+             "  \"surface\": {\"model\": \"hybrid\"}}],"
+             " \"envmap\": {\"builtin\": \"sky\"}}",
+             ply);
+    parse(json, sf);
+    sg_error err = {0};
+    if (sg_world_create(sf, w, &err) != SG_OK)
+        fail_msg("hybrid world: %s", err.message);
+    snprintf(path, path_size, "%s/hybrid.sgworld", sg_test_tmpdir());
+    if (sg_world_save(*w, sf, path, &err) != SG_OK)
+        fail_msg("hybrid save: %s", err.message);
+}
+
+/* Rays with a footprint (sg_ray.spread) at the hybrid sphere: the same
+ * hits, bit for bit; returns how many were level-of-detail (node) hits. */
+static int compare_lod_hits(const sg_world *a, const sg_world *b)
+{
+    uint64_t rng = 3;
+    int lod = 0;
+    for (int k = 0; k < 3000; ++k) {
+        float u = sg_test_rand01(&rng), v = sg_test_rand01(&rng);
+        float th = 6.2831853f * u, ph = acosf(1.0f - 2.0f * v);
+        sg_vec3 o = sg_v3(2.5f + 6.0f * sinf(ph) * cosf(th), 6.0f * cosf(ph), 6.0f * sinf(ph) * sinf(th));
+        sg_vec3 t = sg_v3(2.5f + 1.6f * sg_test_rand01(&rng) - 0.8f, 1.6f * sg_test_rand01(&rng) - 0.8f,
+                          1.6f * sg_test_rand01(&rng) - 0.8f);
+        sg_ray r = {.org = o, .dir = sg_v3_normalize(sg_v3_sub(t, o)), .tmin = 0.0f, .tmax = INFINITY,
+                    .spread = 0.005f + 0.1f * sg_test_rand01(&rng)};
+        sg_world_hit ha, hb;
+        int fa = sg_world_intersect(a, &r, &ha, NULL), fb = sg_world_intersect(b, &r, &hb, NULL);
+        assert_int_equal(fa, fb);
+        if (!fa)
+            continue;
+        if (memcmp(&ha, &hb, sizeof ha) != 0)
+            fail_msg("ray %d (spread %g): built hit t %.9g model %u site %u leaf %u, loaded t %.9g model %u site %u "
+                     "leaf %u",
+                     k, (double)r.spread, (double)ha.hit.t, ha.model, ha.hit.splat, ha.hit.leaf, (double)hb.hit.t,
+                     hb.model, hb.hit.splat, hb.hit.leaf);
+        lod += ha.model >= 1 && ha.hit.leaf == SG_INVALID_ID;
+        sg_ray sr = sg_world_spawn_ray(a, &ha, sg_v3(0, 1, 0), INFINITY);
+        sr.spread = r.spread;
+        assert_int_equal(sg_world_occluded(a, &sr, NULL), sg_world_occluded(b, &sr, NULL));
+    }
+    return lod;
+}
+
+/* A small bake of w saved to name; the file's bytes in *size. */
+static uint8_t *bake_bytes(const sg_world *w, const sg_scene_file *sf, const char *name, size_t *size,
+                           float **frame)
+{
+    sg_bake_desc d = {.photons = {.count = 20000, .max_depth = 4, .seed = 9}, .gather = {.k = 16}};
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%s", sg_test_tmpdir(), name);
+    if (sg_bake_save(b, path, sg_world_file_scene_hash(sf), &err) != SG_OK)
+        fail_msg("bake save: %s", err.message);
+    /* the lookup frame: camera rays carry a footprint, so nodes are hit */
+    sg_bake_frame_desc fd = {.width = 64, .height = 48};
+    assert_int_equal(sg_camera_look_at(sg_v3(6, 3, 7), sg_v3(1.5f, -0.3f, 0), sg_v3(0, 1, 0), 45.0f, 64.0f / 48.0f,
+                                       &fd.camera, &err),
+                     SG_OK);
+    sg_image img = {0};
+    if (sg_bake_render(b, w, &fd, &img, NULL, &err) != SG_OK)
+        fail_msg("bake render: %s", err.message);
+    *frame = malloc(sizeof(float) * 3 * 64 * 48);
+    assert_non_null(*frame);
+    memcpy(*frame, img.data, sizeof(float) * 3 * 64 * 48);
+    sg_image_free(&img);
+    sg_bake_destroy(b);
+    return read_all(path, size);
+}
+
+/* 7b. A scene with hybrid models (ground, sphere, a coloured mesh from a
+ * file) beside an MLS model comes back with the bits of the build: hits
+ * of rays without and with a footprint (level-of-detail node hits among
+ * them), light sites, albedo, frames, a bake file and its lookup frame;
+ * and a loaded world saves the file it came from. */
+static void test_world_file_hybrid_roundtrip(void **state)
 {
     (void)state;
-    sg_scene_file hy = {0};
-    parse("{\"models\": [{\"builtin\": \"sphere\", \"points\": 500},"
-          " {\"builtin\": \"ground\", \"surface\": {\"model\": \"hybrid\"}}]}", &hy);
+    sg_scene_file sf = {0};
+    sg_world *w = NULL, *loaded = NULL;
+    char path[4200];
+    hybrid_world(&sf, &w, path, sizeof path);
     sg_error err = {0};
-    sg_world *w = NULL;
-    assert_int_equal(sg_world_create(&hy, &w, &err), SG_OK);
+    if (sg_world_load(path, &sf, NULL, &loaded, &err) != SG_OK)
+        fail_msg("hybrid load: %s", err.message);
+    compare_worlds(w, loaded);
+    int lod = compare_lod_hits(w, loaded);
+    if (lod < 100)
+        fail_msg("only %d level-of-detail hits: the footprint rays prove little", lod);
     size_t n1, n2;
-    uint8_t *before = read_all(world_path, &n1);
-    assert_int_equal(sg_world_save(w, &hy, world_path, &err), SG_ERR_UNSUPPORTED);
-    if (!strstr(err.message, "$.models[1]") || !strstr(err.message, "hybrid"))
-        fail_msg("message \"%s\" does not name the hybrid model", err.message);
-    uint8_t *after = read_all(world_path, &n2);
+    float *f1, *f2;
+    uint8_t *b1 = bake_bytes(w, &sf, "hb.sgbake", &n1, &f1), *b2 = bake_bytes(loaded, &sf, "hl.sgbake", &n2, &f2);
     assert_int_equal(n1, n2);
-    assert_memory_equal(before, after, n1);
-    free(before);
-    free(after);
+    assert_memory_equal(b1, b2, n1);
+    assert_memory_equal(f1, f2, sizeof(float) * 3 * 64 * 48);
+    free(b1), free(b2), free(f1), free(f2);
+    char again[4200];
+    snprintf(again, sizeof again, "%s/hybrid-again.sgworld", sg_test_tmpdir());
+    assert_int_equal(sg_world_save(loaded, &sf, again, &err), SG_OK);
+    b1 = read_all(path, &n1);
+    b2 = read_all(again, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(b1, b2, n1);
+    free(b1), free(b2);
+    sg_world_destroy(loaded);
     sg_world_destroy(w);
-    sg_scene_file_free(&hy);
+    sg_scene_file_free(&sf);
+}
+
+/* 7c. Damage in a hybrid section: a flipped byte in each hybrid array is
+ * a checksum mismatch naming the section; a file cut inside the node
+ * bundles is truncated, naming the section; both SG_ERR_CORRUPT. Every
+ * allocation failing in turn on a hybrid load is clean. */
+static void test_world_file_hybrid_damaged(void **state)
+{
+    (void)state;
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    char path[4200];
+    hybrid_world(&sf, &w, path, sizeof path);
+    sg_world_destroy(w);
+    sg_bake_open_desc od = {.kind = SG_BAKE_KIND_WORLD};
+    sg_bake_file *f = NULL;
+    sg_error err = {0};
+    assert_int_equal(sg_bake_file_open_desc(path, &od, &f, &err), SG_OK);
+    static const char *const tags[] = {"YB02", "YT02", "YI02", "YP02", "YN02", "YB03", "YC03", "YV03"};
+    uint64_t off[8], size[8];
+    for (int k = 0; k < 8; ++k) {
+        const sg_bake_section *sec = sg_bake_file_find(f, tags[k]);
+        if (!sec)
+            fail_msg("no section %s in the hybrid world", tags[k]);
+        off[k] = sec->offset, size[k] = sec->size;
+    }
+    sg_bake_file_close(f);
+    size_t n;
+    uint8_t *buf = read_all(path, &n);
+    for (int k = 0; k < 8; ++k) {
+        size_t at = (size_t)(off[k] + size[k] / 2);
+        buf[at] ^= 0x04;
+        const char *p = sg_test_write_file("hflip.sgworld", buf, n);
+        sg_world *lw = NULL;
+        sg_status st = sg_world_load(p, &sf, NULL, &lw, &err);
+        if (st != SG_ERR_CORRUPT || !strstr(err.message, tags[k]) || !strstr(err.message, "checksum mismatch"))
+            fail_msg("%s flipped at byte %zu: status %d, \"%s\"", tags[k], at, (int)st, st ? err.message : "");
+        assert_null(lw);
+        buf[at] ^= 0x04;
+    }
+    const char *p = sg_test_write_file("hcut.sgworld", buf, (size_t)(off[0] + size[0] / 2));
+    sg_world *lw = NULL;
+    sg_status st = sg_world_load(p, &sf, NULL, &lw, &err);
+    if (st != SG_ERR_CORRUPT || !strstr(err.message, "hcut.sgworld"))
+        fail_msg("cut in YB02: status %d, \"%s\"", (int)st, st ? err.message : "");
+    free(buf);
+
+    for (long k = 0;; ++k) {
+        long live = sg_alloc__live();
+        lw = NULL;
+        sg_alloc__fail_after(k);
+        st = sg_world_load(path, &sf, NULL, &lw, &err);
+        sg_alloc__fail_after(-1);
+        if (st == SG_OK) {
+            sg_world_destroy(lw);
+            assert_int_equal(sg_alloc__live(), live);
+            assert_true(k > 3);
+            break;
+        }
+        if (st != SG_ERR_NOMEM)
+            fail_msg("hybrid load, allocation %ld failing: status %d, \"%s\"", k, (int)st, err.message);
+        assert_null(lw);
+        assert_int_equal(sg_alloc__live(), live);
+    }
+    sg_scene_file_free(&sf);
+}
+
+/* 7d. The hybrid level of detail steers queries, not the build, and is no
+ * part of the scene hash: a world saved with the default loads for a
+ * scene asking "hybrid_lod": 0 (full detail) and traces as a world built
+ * so: the same hits, and no node hits, where the default has many. */
+static void test_world_file_hybrid_lod_from_scene(void **state)
+{
+    (void)state;
+    sg_scene_file sf = {0};
+    sg_world *w = NULL, *full = NULL, *loaded = NULL;
+    char path[4200];
+    hybrid_world(&sf, &w, path, sizeof path);
+    int lod_default = compare_lod_hits(w, w);
+    for (size_t m = 1; m < sf.model_count; ++m)
+        sf.models[m].surface.hybrid_lod = -1.0f; /* as the parser makes "hybrid_lod": 0 */
+    sg_error err = {0};
+    assert_int_equal(sg_world_create(&sf, &full, &err), SG_OK);
+    if (sg_world_load(path, &sf, NULL, &loaded, &err) != SG_OK)
+        fail_msg("load with hybrid_lod 0: %s", err.message);
+    int lod = compare_lod_hits(full, loaded);
+    if (lod != 0 || lod_default < 100)
+        fail_msg("%d node hits with hybrid_lod 0 (want 0), %d with the default (want 100 or more)", lod, lod_default);
+    sg_world_destroy(loaded);
+    sg_world_destroy(full);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
 }
 
 /* 8. Every allocation failing in turn: SG_OK or a clean SG_ERR_NOMEM. */
@@ -441,12 +650,12 @@ typedef struct copied {
     void *owned[SG_SA_COUNT];
 } copied;
 
-/* A store of model m of the built world with every array copied, so a
- * test may damage it. */
-static void copy_store(uint32_t m, copied *c)
+/* A store of model m of world w with every array copied, so a test may
+ * damage it. */
+static void copy_store_of(const sg_world *w, uint32_t m, copied *c)
 {
     memset(c, 0, sizeof *c);
-    sg_scene_store_of(sg_world_scene(built, m), &c->store);
+    sg_scene_store_of(sg_world_scene(w, m), &c->store);
     for (int a = 0; a < SG_SA_COUNT; ++a) {
         if (!c->store.data[a])
             continue;
@@ -458,6 +667,8 @@ static void copy_store(uint32_t m, copied *c)
         c->store.data[a] = c->owned[a];
     }
 }
+
+static void copy_store(uint32_t m, copied *c) { copy_store_of(built, m, c); }
 
 static void free_copy(copied *c)
 {
@@ -564,6 +775,108 @@ static void test_scene_store_links(void **state)
     free_copy(&c);
 }
 
+/* 12. The hybrid hierarchy's arrays: child words (a bundle not after its
+ * parent, past the end, reached twice), leaf ranges past the triangles,
+ * lanes that are neither empty nor a sphere, vertex ids out of range, a
+ * zero-area triangle, an input index out of range, NaN positions and
+ * colours, wrong lengths, missing or extra arrays, another branching
+ * factor: each refused naming the array and element; the untouched copy
+ * loads. */
+static void test_scene_store_hybrid(void **state)
+{
+    (void)state;
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    char path[4200];
+    hybrid_world(&sf, &w, path, sizeof path);
+    copied c;
+    copy_store_of(w, 2, &c); /* the hybrid sphere */
+    expect_store(&c, SG_OK, NULL);
+    sg_stree_bundle *B = c.owned[SG_SA_HY_BUNDLES];
+    const size_t bundles = c.store.items[SG_SA_HY_BUNDLES];
+    assert_true(bundles > 4 && !sg_stree_is_leaf(B[0].child[0]));
+    uint32_t keep = B[0].child[0];
+    B[0].child[0] = 0; /* the root's children in its own bundle */
+    expect_store(&c, SG_ERR_CORRUPT, "sphere-tree node 0: children bundle 0 is not after it");
+    B[0].child[0] = (uint32_t)bundles;
+    expect_store(&c, SG_ERR_CORRUPT, "is not after it within");
+    B[0].child[0] = keep;
+    /* two inner lanes of the root's children with the same children */
+    assert_true(!sg_stree_is_leaf(B[1].child[0]) && !sg_stree_is_leaf(B[1].child[1]));
+    uint32_t k1 = B[1].child[1];
+    B[1].child[1] = B[1].child[0];
+    expect_store(&c, SG_ERR_CORRUPT, "reached twice");
+    B[1].child[1] = k1;
+    /* a leaf whose triangles run past the end */
+    size_t lb = 0;
+    int ll = -1;
+    for (size_t b = 0; b < bundles && ll < 0; ++b)
+        for (int l = 0; l < SG_STREE_WIDTH; ++l)
+            if (sg_stree_is_leaf(B[b].child[l])) {
+                lb = b, ll = l;
+                break;
+            }
+    assert_true(ll >= 0);
+    keep = B[lb].child[ll];
+    B[lb].child[ll] = SG_STREE_LEAF | (7u << SG_STREE_COUNT_SHIFT) | (uint32_t)c.store.items[SG_SA_HY_TRI];
+    expect_store(&c, SG_ERR_CORRUPT, "past");
+    B[lb].child[ll] = keep;
+    /* the root bundle's lane 1 made a sphere; a node's radius NaN */
+    B[0].r[1] = 1.0f;
+    expect_store(&c, SG_ERR_CORRUPT, "sphere-tree node 1: an empty lane");
+    B[0].r[1] = NAN;
+    float r0 = B[0].r[0];
+    B[0].r[0] = NAN;
+    expect_store(&c, SG_ERR_CORRUPT, "sphere-tree node 0: sphere");
+    B[0].r[0] = r0;
+    uint32_t *tri = c.owned[SG_SA_HY_TRI];
+    uint32_t t4 = tri[4];
+    tri[4] = (uint32_t)c.store.items[SG_SA_HY_POS];
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid triangle 1: vertices");
+    tri[4] = tri[3]; /* a repeated vertex: zero area */
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid triangle 1: zero area");
+    tri[4] = t4;
+    uint32_t *tid = c.owned[SG_SA_HY_TRI_ID];
+    uint32_t i5 = tid[5];
+    tid[5] = 1u << 30;
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid triangle 5: input index");
+    tid[5] = i5;
+    float *pos = c.owned[SG_SA_HY_POS];
+    float p = pos[3 * 17 + 1];
+    pos[3 * 17 + 1] = NAN;
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid vertex 17 is not finite");
+    pos[3 * 17 + 1] = p;
+    c.store.items[SG_SA_HY_TRI_ID]--;
+    expect_store(&c, SG_ERR_CORRUPT, "array YI holds");
+    c.store.items[SG_SA_HY_TRI_ID]++;
+    const void *nrm = c.store.data[SG_SA_HY_NORMAL];
+    c.store.data[SG_SA_HY_NORMAL] = NULL;
+    expect_store(&c, SG_ERR_CORRUPT, "array YN is missing");
+    c.store.data[SG_SA_HY_NORMAL] = nrm;
+    c.store.data[SG_SA_HY_NODE_COLOR] = c.store.data[SG_SA_HY_POS]; /* this mesh has no colours */
+    expect_store(&c, SG_ERR_CORRUPT, "array YC on a hybrid surface that has none");
+    c.store.data[SG_SA_HY_NODE_COLOR] = NULL;
+    /* slot 87 holds the branching factor (scene_store.c scalars()) */
+    assert_int_equal(c.store.scalars[87], SG_STREE_WIDTH);
+    c.store.scalars[87] = SG_STREE_WIDTH == 8 ? 4 : 8;
+    expect_store(&c, SG_ERR_CORRUPT, "children per node");
+    c.store.scalars[87] = SG_STREE_WIDTH;
+    expect_store(&c, SG_OK, NULL); /* every damage was undone */
+    free_copy(&c);
+
+    copy_store_of(w, 3, &c); /* the coloured cube */
+    expect_store(&c, SG_OK, NULL);
+    float *vc = c.owned[SG_SA_HY_COLOR], *nc = c.owned[SG_SA_HY_NODE_COLOR];
+    vc[3 * 5 + 2] = INFINITY;
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid vertex colour 5 is not finite");
+    vc[3 * 5 + 2] = 0.5f;
+    nc[0] = NAN;
+    expect_store(&c, SG_ERR_CORRUPT, "sphere-tree node colour 0 is not finite");
+    free_copy(&c);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -574,11 +887,14 @@ int main(void)
         cmocka_unit_test(test_world_file_other_scene_and_bake),
         cmocka_unit_test(test_world_file_changed_input),
         cmocka_unit_test(test_world_file_failed_save),
-        cmocka_unit_test(test_world_file_hybrid_refused),
+        cmocka_unit_test(test_world_file_hybrid_roundtrip),
+        cmocka_unit_test(test_world_file_hybrid_damaged),
+        cmocka_unit_test(test_world_file_hybrid_lod_from_scene),
         cmocka_unit_test(test_world_file_load_nomem),
         cmocka_unit_test(test_world_file_iso_lod_from_scene),
         cmocka_unit_test(test_scene_store_nan),
         cmocka_unit_test(test_scene_store_links),
+        cmocka_unit_test(test_scene_store_hybrid),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
