@@ -7,9 +7,10 @@
  *    arrays, as a file made for this scene would;
  *  - odd: CRCs stop a fuzzer at the file's checksums, so this mode damages
  *    the arrays of a valid world directly: byte 1 picks the model (MLS,
- *    disk, ISO), then each 5 bytes (offset u32, xor u8) flip bits anywhere
+ *    disk, ISO, hybrid), then each 5 bytes (offset u32, xor u8) flip bits anywhere
  *    in its scalars and arrays; sg_scene_from_store must refuse or give a
- *    scene every query runs on without a fault. */
+ *    scene every query runs on without a fault (rays with and without a
+ *    footprint, so the hybrid's level-of-detail path runs too). */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -34,7 +35,8 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     static const char json[] =
         "{\"models\": [{\"builtin\": \"sphere\", \"points\": 60},"
         " {\"builtin\": \"ground\", \"points\": 16, \"surface\": {\"model\": \"disk\"}},"
-        " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"iso\"}}]}";
+        " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"iso\"}},"
+        " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"hybrid\"}}]}";
     sg_error err;
     if (sg_scene_file_parse(json, sizeof json - 1, "fuzz", NULL, &scene, &err) != SG_OK ||
         sg_world_create(&scene, &world, &err) != SG_OK)
@@ -66,7 +68,7 @@ static void file_mode(const uint8_t *data, size_t size)
     sg_world *w = NULL;
     sg_error err;
     if (sg_world_load(path, &scene, NULL, &w, &err) == SG_OK) {
-        sg_ray r = {.org = {0, 5, 5}, .dir = {0, -0.7071f, -0.7071f}, .tmin = 0, .tmax = INFINITY};
+        sg_ray r = {.org = {0, 5, 5}, .dir = {0, -0.7071f, -0.7071f}, .tmin = 0, .tmax = INFINITY, .spread = 0.3f};
         sg_world_hit h;
         sg_world_intersect(w, &r, &h, NULL);
         sg_world_destroy(w);
@@ -77,7 +79,7 @@ static void store_mode(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return;
-    uint32_t m = data[0] % 3;
+    uint32_t m = data[0] % 4;
     sg_scene_store st;
     sg_scene_store_of(sg_world_scene(world, m), &st);
     /* copies of the arrays, laid end to end after the scalars for the edits */
@@ -118,6 +120,7 @@ static void store_mode(const uint8_t *data, size_t size)
             float a = 0.39269908f * (float)k;
             sg_ray r = {.org = {4 * cosf(a), 1.5f, 4 * sinf(a)}, .tmin = 0, .tmax = INFINITY};
             r.dir = sg_v3_normalize(sg_v3_sub(sg_v3(0, 0, 0), r.org));
+            r.spread = (k & 1) ? 0.3f : 0.0f;
             sg_hit h;
             if (sg_scene_intersect(sc, &r, &h, NULL)) {
                 uint32_t ids[8];

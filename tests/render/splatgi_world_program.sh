@@ -1,6 +1,6 @@
 #!/bin/sh
 # splatgi_world_program.sh — the world file end to end on a small scene
-# of three surfaces (MLS, disk, ISO): splatgi-world writes it; a bake and a
+# of four surfaces (MLS, disk, ISO, hybrid): splatgi-world writes it; a bake and a
 # frame made with --world are the same bytes (cmp) as those made by
 # building; --if-stale keeps a fresh file and rebuilds a damaged or stale
 # one; --world refuses a missing, damaged or other scene's file and a bake
@@ -17,7 +17,9 @@ cat > scene.json <<'JSON'
                 "material": { "type": "ggx", "roughness": 0.4 } },
               { "builtin": "ground", "points": 4000, "surface": { "model": "disk" } },
               { "builtin": "sphere", "points": 3000, "transform": { "translate": [2.2, 1, 0] },
-                "surface": { "model": "iso" } } ],
+                "surface": { "model": "iso" } },
+              { "builtin": "sphere", "points": 2000, "transform": { "translate": [-1.2, 0.6, 1.5], "scale": 0.5 },
+                "surface": { "model": "hybrid" } } ],
   "envmap": { "builtin": "sky" },
   "cameras": [ { "name": "main", "eye": [1, 2.5, 5], "look": [1, 0.8, 0] } ],
   "render": { "width": 96, "height": 96 } }
