@@ -27,6 +27,7 @@
 #include "render/render.h"
 #include "render/world.h"
 #include "render/world_file.h"
+#include "surface/scene_int.h"
 #include "surface/scene_store.h"
 
 /* One model of each surface: MLS sphere, disk ground, ISO sphere. */
@@ -107,6 +108,40 @@ static void expect_load(const char *path, sg_status want, const char *needle)
         fail_msg("%s: status %d, want %d; message \"%s\" lacks \"%s\"", path, (int)st, (int)want, msg, needle);
 }
 
+/* The build facts of a loaded scene (and of its ISO or hybrid) are the
+ * built one's but for the build time, stored as 0 (field by field: the
+ * structs have padding). */
+static void compare_infos(const sg_scene *a, const sg_scene *b)
+{
+    sg_scene_info ia, ib;
+    sg_scene_get_info(a, &ia);
+    sg_scene_get_info(b, &ib);
+    assert_true(ia.splat_count == ib.splat_count && ia.node_count == ib.node_count &&
+                ia.leaf_count == ib.leaf_count && ia.memory_bytes == ib.memory_bytes && ia.depth == ib.depth);
+    assert_memory_equal(&ia.bounds, &ib.bounds, sizeof ia.bounds);
+    assert_true((a->iso != NULL) == (b->iso != NULL) && (a->hybrid != NULL) == (b->hybrid != NULL));
+    if (a->iso) {
+        sg_iso_info oa, ob;
+        sg_iso_get_info(a->iso, &oa);
+        sg_iso_get_info(b->iso, &ob);
+        float fa[3] = {oa.f_scale, oa.r_min, oa.r_max}, fb[3] = {ob.f_scale, ob.r_min, ob.r_max};
+        if (memcmp(fa, fb, sizeof fa) != 0 || memcmp(&oa.bounds, &ob.bounds, sizeof oa.bounds) != 0 ||
+            oa.leaf_count != ob.leaf_count || oa.memory_bytes != ob.memory_bytes)
+            fail_msg("ISO info differs: f_scale %g / %g, r_min %g / %g, r_max %g / %g, bounds hi.z %g / %g",
+                     (double)fa[0], (double)fb[0], (double)fa[1], (double)fb[1], (double)fa[2], (double)fb[2],
+                     (double)oa.bounds.hi.z, (double)ob.bounds.hi.z);
+    }
+    if (a->hybrid) {
+        sg_hybrid_info ha, hb;
+        sg_hybrid_get_info(a->hybrid, &ha);
+        sg_hybrid_get_info(b->hybrid, &hb);
+        assert_true(ha.triangle_count == hb.triangle_count && ha.node_slots == hb.node_slots &&
+                    ha.memory_bytes == hb.memory_bytes && ha.depth == hb.depth && ha.width == hb.width);
+        assert_memory_equal(&ha.bounds, &hb.bounds, sizeof ha.bounds);
+        assert_int_equal(sg_hybrid_layout_hash(a->hybrid), sg_hybrid_layout_hash(b->hybrid));
+    }
+}
+
 static void compare_worlds(const sg_world *a, const sg_world *b)
 {
     assert_int_equal(sg_world_model_count(a), sg_world_model_count(b));
@@ -153,6 +188,7 @@ static void compare_worlds(const sg_world *a, const sg_world *b)
         assert_memory_equal(sa->radius, sb->radius, sa->count * sizeof(float));
         assert_memory_equal(sa->ab, sb->ab, sa->count * sizeof(float));
         assert_memory_equal(sg_world_material(a, m), sg_world_material(b, m), sizeof(sg_material));
+        compare_infos(sg_world_scene(a, m), sg_world_scene(b, m));
         /* a frame of the model alone, pixel for pixel */
         sg_render_desc rd = {.width = 48, .height = 40, .shade = SG_SHADE_PHONG, .threads = 1};
         sg_error err = {0};
