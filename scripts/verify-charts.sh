@@ -133,8 +133,9 @@ fi
 # ---- 2b. global illumination on concave close-ups ---------------------------
 csv="$dir/gi.csv"
 if [ -f "$csv" ]; then
-  # columns: 1 scene, 2 estimator, 3 label, 13 total_cpu_s, 14 rel_mse, 20 ref_noise, 24 chart (on the curve)
-  scenes="$(awk -F, 'NR > 1 && !seen[$1]++ { print $1 }' "$csv")"
+  # columns: 1 scene, 2 estimator, 3 label, 13 total_cpu_s, 14 rel_mse, 20 ref_noise, 24 chart (on the curve),
+  # 25 surface: the chart is the MLS ladder (the ISO and hybrid rows are gi.md's surfaces table)
+  scenes="$(awk -F, 'NR > 1 && $25 == "mls" && !seen[$1]++ { print $1 }' "$csv")"
   n="$(echo "$scenes" | wc -l)"
   cols=$(( n < 2 ? n : 2 )); rows=$(( (n + cols - 1) / cols ))
   {
@@ -147,9 +148,9 @@ if [ -f "$csv" ]; then
     echo "set xlabel \"CPU seconds, both threads\""
     echo "set ylabel \"relMSE against the reference\""
     for sc in $scenes; do
-      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $2 == "transport" && $24 == 1 { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_t_$sc"
-      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $2 == "photons" && $24 == 1 { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_p_$sc"
-      noise="$(awk -F, -v s="$sc" 'NR > 1 && $1 == s { print $20; exit }' "$csv")"
+      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $25 == "mls" && $2 == "transport" && $24 == 1 { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_t_$sc"
+      awk -F, -v s="$sc" 'NR > 1 && $1 == s && $25 == "mls" && $2 == "photons" && $24 == 1 { print $13, $14, $3 }' "$csv" | sort -n >"$tmpd/gi_p_$sc"
+      noise="$(awk -F, -v s="$sc" 'NR > 1 && $1 == s && $25 == "mls" { print $20; exit }' "$csv")"
       echo "set title \"$sc\""
       echo "unset arrow"
       echo "set arrow from first 38, graph 0 to first 38, graph 1 nohead dt 3 lc rgb \"#7f7f7f\""

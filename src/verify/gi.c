@@ -29,12 +29,23 @@
  *    the default bake's + one lookup frame's CPU seconds;
  *  - the white furnace: the scan alone (no ground; the room with its
  *    bunny), albedo 1, uniform sky L = 1; every covered pixel of the
- *    lookup frame should be 1: mean, smallest, largest, share beyond 3%.
- * Output: gi.csv, furnace.csv, gi.md in out_dir; difference images in
- * diff_dir; scripts/verify-charts.sh draws verify_gi.png from gi.csv.
+ *    lookup frame should be 1: mean, smallest, largest, share beyond 3%;
+ *  - the other surface models (other_surfaces: ISO, hybrid): the same
+ *    world with every model on that surface, its own converged reference
+ *    (cached under its own scene key), the default rung (and on sweep
+ *    close-ups the rungs marked `surfaces`) against that reference and
+ *    against the MLS world's, and the default bake's furnace on that
+ *    surface. Against its own reference a bake shows the error of its
+ *    light alone; against the MLS one, that plus the surface's geometric
+ *    difference from the MLS surface (crevices bridged, a mesh's facets).
+ * Output: gi.csv (column `surface`: mls, iso, hybrid; `reference`: own or
+ * mls), furnace.csv (`surface`), gi.md in out_dir; difference images in
+ * diff_dir; scripts/verify-charts.sh draws verify_gi.png from gi.csv's
+ * MLS rows.
  *
  * Invariants:
- *  1. every bake of a close-up is compared with the same reference;
+ *  1. every bake of a close-up's world is compared with that world's
+ *     reference (and a non-MLS world's also with the MLS world's);
  *  2. CPU times are process CPU time (clock_gettime), so another process's
  *     load does not inflate them (it can still slow memory);
  *  3. a row is written for every bake asked for; a failed call stops the
@@ -112,33 +123,56 @@ typedef struct rung {
                                 are the gather-ray and k sweeps)          */
     int core;                /* run on every close-up (the others only on
                                 those with sweep)                         */
+    int surfaces;            /* also on the other surface models' worlds of
+                                the sweep close-ups (the default rung runs
+                                on every close-up's)                       */
 } rung;
 
 static const rung ladder[] = {
     /* the transport estimator from coarse to fine: the curve */
-    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0, 0, 1, 0},
-    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0, 0, 1, 1},
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 0, 1, 1, 1},
-    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0, 0, 1, 0},
-    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0, 0, 1, 1},
-    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0, 0, 1, 0},
-    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0, 0, 1, 0},
+    {"s8 16+32", SG_BAKE_INDIRECT_TRANSPORT, 8.0f, 16, 32, 0, 0, 0, 1, 0, 0},
+    {"s4 16+32", SG_BAKE_INDIRECT_TRANSPORT, 4.0f, 16, 32, 0, 0, 0, 1, 1, 0},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 0, 0, 0, 0, 1, 1, 1, 0},
+    {"s2 32+64", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 32, 64, 0, 0, 0, 1, 0, 0},
+    {"s2 64+128", SG_BAKE_INDIRECT_TRANSPORT, 2.0f, 64, 128, 0, 0, 0, 1, 1, 1},
+    {"s1 64+128", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 64, 128, 0, 0, 0, 1, 0, 0},
+    {"s1 128+256", SG_BAKE_INDIRECT_TRANSPORT, 1.0f, 128, 256, 0, 0, 0, 1, 0, 0},
     /* gather rays alone, at the default spacing and envmap rays */
-    {"32+16", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 16, 0, 0, 0, 0, 0},
-    {"32+32", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 32, 0, 0, 0, 0, 0},
-    {"32+128", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 128, 0, 0, 0, 0, 0},
-    {"32+256", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 256, 0, 0, 0, 0, 0},
+    {"32+16", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 16, 0, 0, 0, 0, 0, 0},
+    {"32+32", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 32, 0, 0, 0, 0, 0, 0},
+    {"32+128", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 128, 0, 0, 0, 0, 0, 0},
+    {"32+256", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 32, 256, 0, 0, 0, 0, 0, 0},
     /* the photon estimator: photons (its curve), then k */
-    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0, 0, 1, 1},
-    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0, 0, 1, 1},
-    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0, 0, 1, 0},
-    {"1M k16", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 16, 0, 0, 0},
-    {"1M k256", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 256, 0, 0, 0},
+    {"1M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 0, 0, 1, 1, 0},
+    {"4M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 4000000, 0, 0, 1, 1, 0},
+    {"16M photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 16000000, 0, 0, 1, 0, 0},
+    {"1M k16", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 16, 0, 0, 0, 0},
+    {"1M k256", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 1000000, 256, 0, 0, 0, 0},
 };
 static const rung ci_ladder[] = {
-    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 0, 1, 1, 1},
-    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0, 0, 1, 1},
+    {"default", SG_BAKE_INDIRECT_TRANSPORT, 0.0f, 8, 16, 0, 0, 1, 1, 1, 0},
+    {"photons", SG_BAKE_INDIRECT_PHOTONS, 0.0f, 0, 0, 20000, 0, 0, 1, 1, 0},
 };
+
+/* The surface models measured beside the default MLS (whose world runs the
+ * ladder and is the other rows' second reference), by scene-file name
+ * ("surface": {"model": ...}), each with its camera rays' level-of-detail
+ * member set to 0: the bake frames then trace the exact surface, as the
+ * reference does (refcache.h, version 5), so a row measures the surface
+ * and its light, not the viewer's coarse patches (docs/iso.md,
+ * docs/hybrid.md). Which models take which (make_world): every model
+ * kind is sampled into points, so all take the ISO; the hybrid needs
+ * triangles, which the builtins (room, ground, bunny) are made as
+ * (render/world.c), and a scan file has only if it is a mesh: a point
+ * cloud's close-up is skipped for the hybrid, with the reason logged. */
+typedef struct gsurface {
+    const char *name;        /* scene-file name, and the CSV's surface    */
+    const char *lod;         /* its camera rays' level-of-detail member   */
+    int needs_triangles;     /* the hybrid: a file model must be a mesh   */
+} gsurface;
+
+static const gsurface mls_surface = {"mls", NULL, 0};
+static const gsurface other_surfaces[] = {{"iso", "iso_lod", 0}, {"hybrid", "hybrid_lod", 1}};
 
 typedef struct gplan {
     size_t points;
@@ -164,40 +198,55 @@ static double lum(const float *p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.072
 
 /* The scene file of a close-up: its scan placed on the ground (ground 0:
  * the scan alone), materials of albedo `albedo`, the map or a uniform
- * sky of radiance 1 (furnace). */
-static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int furnace, sg_scene_file *sf,
-                            sg_world **w, double *cpu_s, sg_error *err)
+ * sky of radiance 1 (furnace), every model on surface gs. When the scan
+ * cannot take gs (a point-cloud file for the hybrid), *w is NULL and
+ * *skip says why (SG_OK). */
+static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int furnace, const gsurface *gs,
+                            sg_scene_file *sf, sg_world **w, double *cpu_s, const char **skip, sg_error *err)
 {
-    char model[5000], env[5000], json[12000], mesh[4400];
+    char model[5000], env[5000], json[12000], mesh[4400], surf[128] = "";
     double albedo = furnace ? 1.0 : MODEL_ALBEDO;
+    *w = NULL;
+    *skip = NULL;
+    if (gs->lod) /* the same member on every model, ground and room included */
+        snprintf(surf, sizeof surf, ", \"surface\": {\"model\": \"%s\", \"%s\": 0}", gs->name, gs->lod);
     if (cu->room) {
         /* examples/room_sunsky.json's room and bunny, in grey */
         snprintf(model, sizeof model,
                  "{\"builtin\": \"room\", \"points\": %zu, \"material\": {\"type\": \"lambert\", \"albedo\": "
-                 "[%g, %g, %g], \"use_point_colors\": false}}, {\"builtin\": \"bunny\", \"points\": %zu, "
+                 "[%g, %g, %g], \"use_point_colors\": false}%s}, {\"builtin\": \"bunny\", \"points\": %zu, "
                  "\"transform\": {\"translate\": [0.2, 0, -0.3], \"rotate_deg\": [0, -60, 0], \"scale\": 0.12}, "
-                 "\"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}",
-                 points, albedo, albedo, albedo, points / 4, albedo, albedo, albedo);
+                 "\"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}%s}",
+                 points, albedo, albedo, albedo, surf, points / 4, albedo, albedo, albedo, surf);
     } else if (cu->mesh) {
         snprintf(mesh, sizeof mesh, "%s/%s", c->d.data_dir, cu->mesh);
-        sg_aabb b;
+        /* read whole: its box places it, its triangles say whether it
+         * can be a hybrid */
+        sg_mesh m = {0};
         sg_ground_placement pl;
-        sg_status st = sg_mesh_read_bounds(mesh, &b, err);
+        sg_status st = sg_mesh_read(mesh, &m, err);
         if (st != SG_OK)
             return st;
+        sg_aabb b = sg_mesh_bounds(&m);
+        size_t triangles = m.triangle_count;
+        sg_mesh_free(&m);
+        if (gs->needs_triangles && triangles == 0) {
+            *skip = "the scan is a point cloud (no triangles)";
+            return SG_OK;
+        }
         if ((st = sg_mesh_ground_placement(b, SCENE_LENGTH, &pl, err)) != SG_OK)
             return st;
         snprintf(model, sizeof model,
                  "{\"path\": \"%s\", \"points\": %zu, \"transform\": {\"translate\": [%.9g, %.9g, %.9g], "
                  "\"scale\": %.9g}, \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], "
-                 "\"use_point_colors\": false}}",
+                 "\"use_point_colors\": false}%s}",
                  mesh, points, (double)pl.translate.x, (double)pl.translate.y, (double)pl.translate.z,
-                 (double)pl.scale, albedo, albedo, albedo);
+                 (double)pl.scale, albedo, albedo, albedo, surf);
     } else {
         snprintf(model, sizeof model,
                  "{\"builtin\": \"bunny\", \"points\": %zu, \"material\": {\"type\": \"lambert\", \"albedo\": "
-                 "[%g, %g, %g], \"use_point_colors\": false}}",
-                 points, albedo, albedo, albedo);
+                 "[%g, %g, %g], \"use_point_colors\": false}%s}",
+                 points, albedo, albedo, albedo, surf);
     }
     if (furnace)
         snprintf(env, sizeof env, "{\"builtin\": \"uniform\", \"radiance\": [1, 1, 1]}");
@@ -207,12 +256,12 @@ static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int
         snprintf(env, sizeof env, "{\"path\": \"%s/%s\"}", c->d.data_dir, cu->env);
     else
         snprintf(env, sizeof env, "{\"builtin\": \"sky\"}");
-    char ground[256] = "";
+    char ground[384] = "";
     if (!furnace && !cu->room)
         snprintf(ground, sizeof ground,
                  ", {\"builtin\": \"ground\", \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], "
-                 "\"use_point_colors\": false}}",
-                 GROUND_ALBEDO, GROUND_ALBEDO, GROUND_ALBEDO);
+                 "\"use_point_colors\": false}%s}",
+                 GROUND_ALBEDO, GROUND_ALBEDO, GROUND_ALBEDO, surf);
     int n = snprintf(json, sizeof json,
                      "{\"models\": [%s%s], \"envmap\": %s, \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, "
                      "%.9g], \"look\": [%.9g, %.9g, %.9g], \"fov_deg\": %g}], \"render\": {\"max_depth\": %d}}",
@@ -259,7 +308,9 @@ static sg_status model_mask(const sg_world *w, const sg_camera *cam, int n, int 
 }
 
 typedef struct bake_figs {
-    double bake_cpu, frame_cpu, rel_mse, rel_mse_model, energy_model, p99, within3;
+    double bake_cpu, frame_cpu; /* the bake's; one frame x frame lookup frame's */
+    double rel_mse, rel_mse_model, energy_model, p99, within3; /* against one
+                                   reference (score)                      */
     size_t model_pixels;
 } bake_figs;
 
@@ -270,10 +321,15 @@ static sg_bake_desc rung_desc(const rung *r)
                           .direct_samples = r->env_rays, .gather_rays = r->cos_rays, .sample_spacing = r->spacing};
 }
 
-/* One bake of the ladder against the reference. */
-static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const sg_camera *cam,
-                          const rung *r, const sg_ref_result *ref, const unsigned char *mask, bake_figs *f,
-                          sg_error *err)
+/* Whether rung r runs on the other surface models' worlds of cu (and is a
+ * row of gi.md's surfaces table). */
+static int surface_rung(const closeup *cu, const rung *r) { return r->is_default || (cu->sweep && r->surfaces); }
+
+/* One bake of the ladder on w: its image x image lookup frame in *img
+ * (the caller's: sg_image_free), the CPU seconds of the bake and of one
+ * frame x frame lookup frame in f. */
+static sg_status bake_frame(const gplan *p, const sg_world *w, const sg_camera *cam, const rung *r, sg_image *img,
+                            bake_figs *f, sg_error *err)
 {
     sg_bake_desc bd = rung_desc(r);
     sg_bake *b = NULL;
@@ -282,7 +338,7 @@ static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, cons
     if (st != SG_OK)
         return st;
     f->bake_cpu = cpu_now() - t0;
-    sg_image frame = {0}, img = {0};
+    sg_image frame = {0};
     sg_bake_frame_desc fd = {.camera = *cam, .width = p->frame, .height = p->frame};
     t0 = cpu_now();
     st = sg_bake_render(b, w, &fd, &frame, NULL, err);
@@ -290,41 +346,105 @@ static sg_status run_rung(const vctx *c, const gplan *p, const closeup *cu, cons
     sg_image_free(&frame);
     fd.width = fd.height = p->image;
     if (st == SG_OK)
-        st = sg_bake_render(b, w, &fd, &img, NULL, err);
+        st = sg_bake_render(b, w, &fd, img, NULL, err);
     sg_bake_destroy(b);
-    if (st != SG_OK)
-        return st;
-    char name[200];
-    snprintf(name, sizeof name, "gi_%s_%s", cu->name, r->label);
+    return st;
+}
+
+/* The difference image's name: gi_<scene>[_<surface>]_<label>[_vs_mls],
+ * blanks and '+' as '_'. */
+static void diff_name(char *name, size_t cap, const closeup *cu, const gsurface *gs, const char *label, int vs_mls)
+{
+    if (gs->lod)
+        snprintf(name, cap, "gi_%s_%s_%s%s", cu->name, gs->name, label, vs_mls ? "_vs_mls" : "");
+    else
+        snprintf(name, cap, "gi_%s_%s", cu->name, label);
     for (char *q = name; *q; ++q)
         if (*q == ' ' || *q == '+')
             *q = '_';
+}
+
+/* A lookup frame against a reference: relMSE and p99 over the frame, and
+ * over the model's pixels (mask) relMSE, energy ratio and the share within
+ * 3 of the reference's standard errors; the difference image as name. */
+static sg_status score(const vctx *c, const gplan *p, const sg_image *img, const sg_ref_result *ref,
+                       const unsigned char *mask, const char *name, bake_figs *f, sg_error *err)
+{
     sg_image_metrics m;
-    st = sg_verify__compare(c, &img, &ref->mean, name, &m, err);
-    if (st == SG_OK) {
-        f->rel_mse = m.rel_mse;
-        f->p99 = m.p99_rel_error;
-        double sa = 0, sb = 0, rel = 0, eps = m.epsilon;
-        size_t n = 0, in3 = 0;
-        for (size_t i = 0; i < (size_t)p->image * (size_t)p->image; ++i) {
-            if (!mask[i])
-                continue;
-            const float *a = img.data + 3 * i, *bb = ref->mean.data + 3 * i, *se = ref->std_error.data + 3 * i;
-            double la = lum(a), lb = lum(bb);
-            sa += la;
-            sb += lb;
-            for (int ch = 0; ch < 3; ++ch)
-                rel += ((double)a[ch] - bb[ch]) * ((double)a[ch] - bb[ch]) / ((double)bb[ch] * bb[ch] + eps) / 3.0;
-            in3 += fabs(la - lb) <= 3.0 * lum(se);
-            ++n;
-        }
-        f->model_pixels = n;
-        f->rel_mse_model = n ? rel / (double)n : 0.0;
-        f->energy_model = sb > 0 ? sa / sb : 0.0;
-        f->within3 = n ? (double)in3 / (double)n : 0.0;
+    sg_status st = sg_verify__compare(c, img, &ref->mean, name, &m, err);
+    if (st != SG_OK)
+        return st;
+    f->rel_mse = m.rel_mse;
+    f->p99 = m.p99_rel_error;
+    double sa = 0, sb = 0, rel = 0, eps = m.epsilon;
+    size_t n = 0, in3 = 0;
+    for (size_t i = 0; i < (size_t)p->image * (size_t)p->image; ++i) {
+        if (!mask[i])
+            continue;
+        const float *a = img->data + 3 * i, *bb = ref->mean.data + 3 * i, *se = ref->std_error.data + 3 * i;
+        double la = lum(a), lb = lum(bb);
+        sa += la;
+        sb += lb;
+        for (int ch = 0; ch < 3; ++ch)
+            rel += ((double)a[ch] - bb[ch]) * ((double)a[ch] - bb[ch]) / ((double)bb[ch] * bb[ch] + eps) / 3.0;
+        in3 += fabs(la - lb) <= 3.0 * lum(se);
+        ++n;
     }
-    sg_image_free(&img);
-    return st;
+    f->model_pixels = n;
+    f->rel_mse_model = n ? rel / (double)n : 0.0;
+    f->energy_model = sb > 0 ? sa / sb : 0.0;
+    f->within3 = n ? (double)in3 / (double)n : 0.0;
+    return SG_OK;
+}
+
+/* The part's tables, filled close-up by close-up and written at its end. */
+typedef struct gtables {
+    vtable csv;              /* gi.csv                                    */
+    vtable fcsv;             /* furnace.csv                               */
+    vtable md;               /* gi.md: the MLS ladder                     */
+    vtable smd;              /* gi.md: the surfaces on the close-ups      */
+    vtable fmd;              /* gi.md: the furnace                        */
+    vtable bmd;              /* gi.md: the budget                         */
+} gtables;
+
+/* One gi.csv row: rung r on surface gs against the reference `reference`
+ * ("own": the world's own surface; "mls": the MLS world's), whose noise
+ * relMSE is noise. */
+static void csv_row(gtables *g, const gplan *p, const closeup *cu, const rung *r, const gsurface *gs,
+                    const char *reference, double world_cpu, const bake_figs *f, double noise)
+{
+    sg_verify__tprintf(&g->csv, "%s,%s,%s,%g,%d,%d,%zu,%zu,%.3f,%.3f,%.4f,%d,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%zu,"
+                                "%.3g,%d,%d,%u,%d,%s,%s\n",
+                       cu->name, r->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", r->label,
+                       (double)r->spacing, r->env_rays, r->cos_rays, r->photons, p->points, world_cpu, f->bake_cpu,
+                       f->frame_cpu, p->frame, world_cpu + f->bake_cpu + f->frame_cpu, f->rel_mse, f->rel_mse_model,
+                       f->energy_model, f->p99, f->within3, f->model_pixels, noise, p->spp, p->image,
+                       r->k ? r->k : 64u, r->chart, gs->name, reference);
+    g->csv.rows++;
+}
+
+/* A row of gi.md's surfaces table: a rung's bake against its own
+ * surface's reference and the MLS one (the same for MLS). */
+typedef struct srow {
+    const rung *r;
+    bake_figs own, mls;
+} srow;
+
+typedef struct furnace_figs {
+    size_t pixels;
+    double mean, lo, hi, beyond3, bake_cpu;
+} furnace_figs;
+
+static void surface_md_rows(gtables *g, const closeup *cu, const gsurface *gs, const srow *sr, int n,
+                            const furnace_figs *ff)
+{
+    for (int i = 0; i < n; ++i)
+        sg_verify__tprintf(&g->smd, "| %s | %s | %s | %.1f | %.5f | %.5f | %.5f / %.5f | %.4f / %.4f | %.3f / %.3f | "
+                                    "%.4f | %.4f | %.4f |\n",
+                           cu->name, gs->name, sr[i].r->label, sr[i].own.bake_cpu, sr[i].own.rel_mse,
+                           sr[i].mls.rel_mse, sr[i].own.rel_mse_model, sr[i].mls.rel_mse_model,
+                           sr[i].own.energy_model, sr[i].mls.energy_model, sr[i].own.p99, sr[i].mls.p99, ff->mean,
+                           ff->lo, ff->hi);
 }
 
 /* The reference path tracer's paths per CPU second on this scene: a small
@@ -344,10 +464,10 @@ static sg_status ref_rate(const gplan *p, const sg_world *w, const sg_camera *ca
     return st;
 }
 
-/* The white furnace on w, the close-up's furnace world (make_world):
- * every covered pixel should be 1. */
-static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const rung *r,
-                         vtable *t, vtable *md, sg_error *err)
+/* The white furnace on w, the close-up's furnace world (make_world) on
+ * surface gs: every covered pixel should be 1. */
+static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const sg_world *w, const gsurface *gs,
+                         const rung *r, gtables *g, furnace_figs *ff, sg_error *err)
 {
     sg_status st;
     sg_camera cam = closeup_camera(cu);
@@ -374,18 +494,195 @@ static sg_status furnace(const vctx *c, const gplan *p, const closeup *cu, const
                     out3 += fabs(v - 1.0) > 0.03;
                     ++n;
                 }
-            double mean = n ? sum / (double)n : 0.0;
-            sg_verify__tprintf(t, "%s,%s,%zu,%.6f,%.6f,%.6f,%.6f,%.3f\n", cu->name, r->label, n, mean, lo, hi,
-                               n ? (double)out3 / (double)n : 0.0, bake_cpu);
-            t->rows++;
-            sg_verify__tprintf(md, "| %s | %s | %zu | %.4f | %.4f | %.4f | %.2f%% | %.1f |\n", cu->name, r->label, n,
-                               mean, lo, hi, n ? 100.0 * (double)out3 / (double)n : 0.0, bake_cpu);
-            sg_verify__log(c, "  furnace %-16s %-10s mean %.4f, pixels [%.4f, %.4f], %.2f%% beyond 3%%\n", cu->name,
-                           r->label, mean, lo, hi, n ? 100.0 * (double)out3 / (double)n : 0.0);
+            *ff = (furnace_figs){.pixels = n, .mean = n ? sum / (double)n : 0.0, .lo = lo, .hi = hi,
+                                 .beyond3 = n ? (double)out3 / (double)n : 0.0, .bake_cpu = bake_cpu};
+            sg_verify__tprintf(&g->fcsv, "%s,%s,%zu,%.6f,%.6f,%.6f,%.6f,%.3f,%s\n", cu->name, r->label, n, ff->mean,
+                               lo, hi, ff->beyond3, bake_cpu, gs->name);
+            g->fcsv.rows++;
+            sg_verify__tprintf(&g->fmd, "| %s | %s | %s | %zu | %.4f | %.4f | %.4f | %.2f%% | %.1f |\n", cu->name,
+                               gs->name, r->label, n, ff->mean, lo, hi, 100.0 * ff->beyond3, bake_cpu);
+            sg_verify__log(c, "  furnace %-16s %-6s %-10s mean %.4f, pixels [%.4f, %.4f], %.2f%% beyond 3%%\n",
+                           cu->name, gs->name, r->label, ff->mean, lo, hi, 100.0 * ff->beyond3);
         }
         sg_bake_destroy(b);
     }
     sg_image_free(&img);
+    return st;
+}
+
+/* The furnaces of a close-up on surface gs: the default bake's (in *ff)
+ * and, on MLS, the photon estimator's beside it. */
+static sg_status furnaces(const vctx *c, const gplan *p, const closeup *cu, const gsurface *gs, const rung *rungs,
+                          int nrungs, gtables *g, furnace_figs *ff, sg_error *err)
+{
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    double world_cpu;
+    const char *skip;
+    sg_status st = make_world(c, cu, p->points, 1, gs, &sf, &w, &world_cpu, &skip, err);
+    (void)world_cpu;
+    if (st != SG_OK || !w) /* skip: not met, the scan took gs in the lit world */
+        return st;
+    const char *photons = c->d.ci ? "photons" : "1M photons";
+    for (int k = 0; k < nrungs && st == SG_OK; ++k) {
+        furnace_figs other;
+        if (rungs[k].is_default)
+            st = furnace(c, p, cu, w, gs, &rungs[k], g, ff, err);
+        else if (!gs->lod && rungs[k].indirect == SG_BAKE_INDIRECT_PHOTONS && !strcmp(rungs[k].label, photons))
+            st = furnace(c, p, cu, w, gs, &rungs[k], g, &other, err);
+    }
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+    return st;
+}
+
+/* The close-up's converged reference on world w, cached under its scene's
+ * own key (each surface model its own), and the relMSE of its own noise. */
+static sg_status closeup_reference(const vctx *c, const gplan *p, const closeup *cu, const sg_scene_file *sf,
+                                   const sg_world *w, sg_ref_result *ref, double *noise, int *cached, sg_error *err)
+{
+    sg_verify_ref_desc rd = {.camera = closeup_camera(cu), .width = p->image, .height = p->image, .spp = p->spp,
+                             .max_depth = closeup_depth(cu), .cache_dir = c->d.cache_dir,
+                             .scene_key = sg_verify_scene_key(sf)};
+    sg_status st = sg_verify_reference(w, &rd, ref, cached, NULL, 0, err);
+    if (st == SG_OK)
+        st = sg_image_noise_rel_mse(&ref->mean, &ref->std_error, 0.0, noise, err);
+    return st;
+}
+
+/* The close-up on the default MLS surface: its reference (*ref, the
+ * caller's to free, kept as the other surfaces' second reference; its
+ * noise in *noise), the ladder's rows and the budget; the rows of the
+ * surfaces table in sr[*nsr]. */
+static sg_status mls_ladder(const vctx *c, const gplan *p, const closeup *cu, const rung *rungs, int nrungs,
+                            gtables *g, sg_ref_result *ref, double *noise, srow *sr, int *nsr, sg_error *err)
+{
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    double world_cpu = 0, rate = 0;
+    const char *skip;
+    unsigned char *mask = NULL;
+    int cached = 0;
+    sg_status st = make_world(c, cu, p->points, 0, &mls_surface, &sf, &w, &world_cpu, &skip, err);
+    if (st != SG_OK)
+        return st;
+    sg_camera cam = closeup_camera(cu);
+    sg_verify__log(c, "gi: %s, world %.1f CPU s\n", cu->name, world_cpu);
+    st = closeup_reference(c, p, cu, &sf, w, ref, noise, &cached, err);
+    if (st == SG_OK)
+        st = model_mask(w, &cam, p->image, cu->room, &mask, err);
+    if (st == SG_OK)
+        st = ref_rate(p, w, &cam, closeup_depth(cu), &rate, err);
+    if (st == SG_OK)
+        sg_verify__log(c, "  reference %d spp%s, own noise relMSE %.2g; %.0f paths per CPU s\n", p->spp,
+                       cached ? " (cached)" : "", *noise, rate);
+    for (int k = 0; k < nrungs && st == SG_OK; ++k) {
+        const rung *r = &rungs[k];
+        if (!cu->sweep && !r->core)
+            continue;
+        bake_figs f = {0};
+        sg_image img = {0};
+        char name[200];
+        diff_name(name, sizeof name, cu, &mls_surface, r->label, 0);
+        if ((st = bake_frame(p, w, &cam, r, &img, &f, err)) == SG_OK)
+            st = score(c, p, &img, ref, mask, name, &f, err);
+        sg_image_free(&img);
+        if (st != SG_OK)
+            break;
+        csv_row(g, p, cu, r, &mls_surface, "own", world_cpu, &f, *noise);
+        sg_verify__tprintf(&g->md, "| %s | %s | %.1f | %.5f | %.5f | %.4f | %.3f | %.3f |\n", cu->name, r->label,
+                           f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
+        sg_verify__log(c, "  %-12s bake %6.1f CPU s, relMSE %.5f (model %.5f), energy %.4f, p99 %.3f, in 3 "
+                          "sigma %.3f\n",
+                       r->label, f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
+        if (surface_rung(cu, r))
+            sr[(*nsr)++] = (srow){r, f, f};
+        if (r->is_default && rate > 0 && f.rel_mse > 0) {
+            double spp = *noise * (double)p->spp / f.rel_mse;
+            double ref_cpu = spp * (double)p->frame * (double)p->frame / rate, ours = f.bake_cpu + f.frame_cpu;
+            sg_verify__tprintf(&g->bmd, "| %s | %.1f | %.5f | %.0f | %.1f | %.1f |\n", cu->name, ours, f.rel_mse,
+                               spp, ref_cpu, ref_cpu / ours);
+            sg_verify__log(c, "  budget: bake + frame %.1f CPU s; the reference needs %.0f spp, %.1f CPU s: "
+                              "%.1fx\n",
+                           ours, spp, ref_cpu, ref_cpu / ours);
+        }
+    }
+    free(mask);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+    return st;
+}
+
+/* The close-up on surface gs (not MLS): its world, its own reference, and
+ * the surface rungs' bakes against both it and the MLS world's reference
+ * mls_ref (noise relMSE mls_noise): one gi.csv row each; then its furnace
+ * and its rows of the surfaces table. A scan that cannot take gs is
+ * skipped, with the reason logged. */
+static sg_status other_surface(const vctx *c, const gplan *p, const closeup *cu, const gsurface *gs,
+                               const rung *rungs, int nrungs, const sg_ref_result *mls_ref, double mls_noise,
+                               gtables *g, sg_error *err)
+{
+    sg_scene_file sf = {0};
+    sg_world *w = NULL;
+    double world_cpu = 0, noise = 0;
+    const char *skip;
+    unsigned char *mask = NULL;
+    sg_ref_result ref = {0};
+    int cached = 0, nsr = 0;
+    srow sr[sizeof ladder / sizeof ladder[0]];
+    sg_status st = make_world(c, cu, p->points, 0, gs, &sf, &w, &world_cpu, &skip, err);
+    if (st != SG_OK)
+        return st;
+    if (!w) {
+        sg_verify__log(c, "gi: %s on %s skipped: %s\n", cu->name, gs->name, skip);
+        return SG_OK;
+    }
+    sg_camera cam = closeup_camera(cu);
+    sg_verify__log(c, "gi: %s on %s, world %.1f CPU s\n", cu->name, gs->name, world_cpu);
+    st = closeup_reference(c, p, cu, &sf, w, &ref, &noise, &cached, err);
+    if (st == SG_OK)
+        st = model_mask(w, &cam, p->image, cu->room, &mask, err);
+    if (st == SG_OK)
+        sg_verify__log(c, "  %s reference %d spp%s, own noise relMSE %.2g\n", gs->name, p->spp,
+                       cached ? " (cached)" : "", noise);
+    for (int k = 0; k < nrungs && st == SG_OK; ++k) {
+        const rung *r = &rungs[k];
+        if (!surface_rung(cu, r))
+            continue;
+        srow row = {.r = r};
+        sg_image img = {0};
+        char name[200];
+        if ((st = bake_frame(p, w, &cam, r, &img, &row.own, err)) == SG_OK) {
+            diff_name(name, sizeof name, cu, gs, r->label, 0);
+            st = score(c, p, &img, &ref, mask, name, &row.own, err);
+        }
+        row.mls.bake_cpu = row.own.bake_cpu;
+        row.mls.frame_cpu = row.own.frame_cpu;
+        if (st == SG_OK) {
+            diff_name(name, sizeof name, cu, gs, r->label, 1);
+            st = score(c, p, &img, mls_ref, mask, name, &row.mls, err);
+        }
+        sg_image_free(&img);
+        if (st != SG_OK)
+            break;
+        csv_row(g, p, cu, r, gs, "own", world_cpu, &row.own, noise);
+        csv_row(g, p, cu, r, gs, "mls", world_cpu, &row.mls, mls_noise);
+        sg_verify__log(c, "  %-6s %-12s bake %6.1f CPU s, relMSE %.5f (model %.5f), energy %.4f, p99 %.3f; "
+                          "against MLS: relMSE %.5f (model %.5f), energy %.4f\n",
+                       gs->name, r->label, row.own.bake_cpu, row.own.rel_mse, row.own.rel_mse_model,
+                       row.own.energy_model, row.own.p99, row.mls.rel_mse, row.mls.rel_mse_model,
+                       row.mls.energy_model);
+        sr[nsr++] = row;
+    }
+    free(mask);
+    sg_ref_result_free(&ref);
+    sg_world_destroy(w);
+    sg_scene_file_free(&sf);
+    furnace_figs ff = {0};
+    if (st == SG_OK)
+        st = furnaces(c, p, cu, gs, rungs, nrungs, g, &ff, err);
+    if (st == SG_OK)
+        surface_md_rows(g, cu, gs, sr, nsr, &ff);
     return st;
 }
 
@@ -396,25 +693,35 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
     int nscenes = c->d.ci ? 1 : (int)(sizeof closeups / sizeof closeups[0]);
     const rung *rungs = c->d.ci ? ci_ladder : ladder;
     int nrungs = c->d.ci ? (int)(sizeof ci_ladder / sizeof ci_ladder[0]) : (int)(sizeof ladder / sizeof ladder[0]);
-    vtable t = {0}, ft = {0}, md = {0}, fmd = {0}, bmd = {0};
-    sg_verify__tprintf(&t, "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,"
-                           "frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,"
-                           "model_pixels,ref_noise,ref_spp,image_size,k,chart\n");
-    sg_verify__tprintf(&ft, "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s\n");
-    sg_verify__tprintf(&md, "Close-ups of concave scans (%zu points each, on the ground) and the room lit through "
-                            "its window (as many, and the bunny inside), %dx%d lookup frame against a %d-spp "
-                            "reference at pixel centres; CPU seconds of both threads; model: the pixels of the "
-                            "scan (of the room: every covered pixel).\n\n| scene | bake | bake CPU s | relMSE | relMSE model | "
-                            "energy model | p99 | within ref. 3 sigma |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+    gtables g = {0};
+    sg_verify__tprintf(&g.csv, "scene,estimator,label,spacing,env_rays,cos_rays,photons,points,world_cpu_s,bake_cpu_s,"
+                               "frame_cpu_s,frame_size,total_cpu_s,rel_mse,rel_mse_model,energy_model,p99,within3,"
+                               "model_pixels,ref_noise,ref_spp,image_size,k,chart,surface,reference\n");
+    sg_verify__tprintf(&g.fcsv, "scene,bake,pixels,mean,min,max,beyond3,bake_cpu_s,surface\n");
+    sg_verify__tprintf(&g.md, "Close-ups of concave scans (%zu points each, on the ground) and the room lit through "
+                              "its window (as many, and the bunny inside), %dx%d lookup frame against a %d-spp "
+                              "reference at pixel centres; CPU seconds of both threads; model: the pixels of the "
+                              "scan (of the room: every covered pixel). The default MLS surface.\n\n| scene | bake | "
+                              "bake CPU s | relMSE | relMSE model | energy model | p99 | within ref. 3 sigma |\n"
+                              "|---|---|---:|---:|---:|---:|---:|---:|\n",
                        p.points, p.image, p.image, p.spp);
-    sg_verify__tprintf(&fmd, "\nWhite furnace (the scan alone, the room with its bunny, albedo 1, uniform sky L = "
-                             "1, %dx%d): every pixel should be 1.\n\n| scene | bake | pixels | mean | smallest | largest | beyond 3%% | "
-                             "bake CPU s |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+    sg_verify__tprintf(&g.smd, "\nSurfaces on the close-ups: the same worlds with every model on the ISO or the "
+                               "hybrid triangle hierarchy (camera rays at full detail), each bake against the "
+                               "reference of its own surface (the error of its light) and against the MLS "
+                               "world's (adding the surface's geometric difference); figure pairs: own / MLS "
+                               "reference. Furnace: the default bake's, on that surface.\n\n| scene | surface | "
+                               "bake | bake CPU s | relMSE vs own ref | relMSE vs MLS ref | model relMSE | "
+                               "energy (model) | p99 | furnace mean | min | max |\n"
+                               "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    sg_verify__tprintf(&g.fmd, "\nWhite furnace (the scan alone, the room with its bunny, albedo 1, uniform sky L = "
+                               "1, %dx%d): every pixel should be 1.\n\n| scene | surface | bake | pixels | mean | "
+                               "smallest | largest | beyond 3%% | bake CPU s |\n"
+                               "|---|---|---|---:|---:|---:|---:|---:|---:|\n",
                        p.image, p.image);
-    sg_verify__tprintf(&bmd, "\nBudget: the default bake + one %dx%d lookup frame against one %dx%d reference frame "
-                             "as accurate (CPU seconds; the reference's noise relMSE falls as 1/spp from its "
-                             "%d-spp value).\n\n| scene | bake + frame CPU s | relMSE | reference spp for it | "
-                             "reference frame CPU s | ratio |\n|---|---:|---:|---:|---:|---:|\n",
+    sg_verify__tprintf(&g.bmd, "\nBudget: the default bake + one %dx%d lookup frame against one %dx%d reference frame "
+                               "as accurate (CPU seconds; the reference's noise relMSE falls as 1/spp from its "
+                               "%d-spp value).\n\n| scene | bake + frame CPU s | relMSE | reference spp for it | "
+                               "reference frame CPU s | ratio |\n|---|---:|---:|---:|---:|---:|\n",
                        p.frame, p.frame, p.frame, p.frame, p.spp);
     sg_status st = SG_OK;
     for (int s = 0; s < nscenes && st == SG_OK; ++s) {
@@ -427,90 +734,35 @@ sg_status sg_verify__gi(vctx *c, sg_error *err)
                 continue;
             }
         }
-        sg_scene_file sf = {0};
-        sg_world *w = NULL;
-        double world_cpu = 0;
-        if ((st = make_world(c, cu, p.points, 0, &sf, &w, &world_cpu, err)) != SG_OK)
-            break;
-        sg_camera cam = closeup_camera(cu);
-        sg_verify__log(c, "gi: %s, world %.1f CPU s\n", cu->name, world_cpu);
-        sg_verify_ref_desc rd = {.camera = cam, .width = p.image, .height = p.image, .spp = p.spp,
-                                 .max_depth = closeup_depth(cu), .cache_dir = c->d.cache_dir, .scene_key = sg_verify_scene_key(&sf)};
         sg_ref_result ref = {0};
-        int cached = 0;
-        double noise = 0, rate = 0;
-        unsigned char *mask = NULL;
-        st = sg_verify_reference(w, &rd, &ref, &cached, NULL, 0, err);
+        double noise = 0;
+        srow sr[sizeof ladder / sizeof ladder[0]];
+        int nsr = 0;
+        furnace_figs ff = {0};
+        st = mls_ladder(c, &p, cu, rungs, nrungs, &g, &ref, &noise, sr, &nsr, err);
         if (st == SG_OK)
-            st = sg_image_noise_rel_mse(&ref.mean, &ref.std_error, 0.0, &noise, err);
+            st = furnaces(c, &p, cu, &mls_surface, rungs, nrungs, &g, &ff, err);
         if (st == SG_OK)
-            st = model_mask(w, &cam, p.image, cu->room, &mask, err);
-        if (st == SG_OK)
-            st = ref_rate(&p, w, &cam, closeup_depth(cu), &rate, err);
-        if (st == SG_OK)
-            sg_verify__log(c, "  reference %d spp%s, own noise relMSE %.2g; %.0f paths per CPU s\n", p.spp,
-                           cached ? " (cached)" : "", noise, rate);
-        for (int k = 0; k < nrungs && st == SG_OK; ++k) {
-            const rung *r = &rungs[k];
-            if (!cu->sweep && !r->core)
-                continue;
-            bake_figs f = {0};
-            if ((st = run_rung(c, &p, cu, w, &cam, r, &ref, mask, &f, err)) != SG_OK)
-                break;
-            double total = world_cpu + f.bake_cpu + f.frame_cpu;
-            sg_verify__tprintf(&t, "%s,%s,%s,%g,%d,%d,%zu,%zu,%.3f,%.3f,%.4f,%d,%.3f,%.6g,%.6g,%.6g,%.6g,%.4f,%zu,"
-                                   "%.3g,%d,%d,%u,%d\n",
-                               cu->name, r->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", r->label,
-                               (double)r->spacing, r->env_rays, r->cos_rays, r->photons, p.points, world_cpu,
-                               f.bake_cpu, f.frame_cpu, p.frame, total, f.rel_mse, f.rel_mse_model, f.energy_model,
-                               f.p99, f.within3, f.model_pixels, noise, p.spp, p.image, r->k ? r->k : 64u, r->chart);
-            t.rows++;
-            sg_verify__tprintf(&md, "| %s | %s | %.1f | %.5f | %.5f | %.4f | %.3f | %.3f |\n", cu->name, r->label,
-                               f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
-            sg_verify__log(c, "  %-12s bake %6.1f CPU s, relMSE %.5f (model %.5f), energy %.4f, p99 %.3f, in 3 "
-                              "sigma %.3f\n",
-                           r->label, f.bake_cpu, f.rel_mse, f.rel_mse_model, f.energy_model, f.p99, f.within3);
-            if (r->is_default && rate > 0 && f.rel_mse > 0) {
-                double spp = noise * (double)p.spp / f.rel_mse;
-                double ref_cpu = spp * (double)p.frame * (double)p.frame / rate, ours = f.bake_cpu + f.frame_cpu;
-                sg_verify__tprintf(&bmd, "| %s | %.1f | %.5f | %.0f | %.1f | %.1f |\n", cu->name, ours, f.rel_mse, spp,
-                                   ref_cpu, ref_cpu / ours);
-                sg_verify__log(c, "  budget: bake + frame %.1f CPU s; the reference needs %.0f spp, %.1f CPU s: "
-                                  "%.1fx\n",
-                               ours, spp, ref_cpu, ref_cpu / ours);
-            }
-        }
-        free(mask);
+            surface_md_rows(&g, cu, &mls_surface, sr, nsr, &ff);
+        for (size_t k = 0; k < sizeof other_surfaces / sizeof other_surfaces[0] && st == SG_OK; ++k)
+            st = other_surface(c, &p, cu, &other_surfaces[k], rungs, nrungs, &ref, noise, &g, err);
         sg_ref_result_free(&ref);
-        sg_world_destroy(w);
-        sg_scene_file_free(&sf);
-        if (st != SG_OK)
-            break;
-        /* The furnace, with the default bake and the photon estimator's,
-         * on one world. */
-        if ((st = make_world(c, cu, p.points, 1, &sf, &w, &world_cpu, err)) != SG_OK)
-            break;
-        const char *photons = c->d.ci ? "photons" : "1M photons";
-        for (int k = 0; k < nrungs && st == SG_OK; ++k)
-            if (rungs[k].is_default ||
-                (rungs[k].indirect == SG_BAKE_INDIRECT_PHOTONS && !strcmp(rungs[k].label, photons)))
-                st = furnace(c, &p, cu, w, &rungs[k], &ft, &fmd, err);
-        sg_world_destroy(w);
-        sg_scene_file_free(&sf);
     }
     if (st == SG_OK)
-        st = sg_verify__twrite(&t, c->d.out_dir, "gi.csv", err);
+        st = sg_verify__twrite(&g.csv, c->d.out_dir, "gi.csv", err);
     if (st == SG_OK)
-        st = sg_verify__twrite(&ft, c->d.out_dir, "furnace.csv", err);
+        st = sg_verify__twrite(&g.fcsv, c->d.out_dir, "furnace.csv", err);
     if (st == SG_OK) {
-        sg_verify__tprintf(&md, "%s%s", fmd.buf ? fmd.buf : "", bmd.buf ? bmd.buf : "");
-        st = sg_verify__twrite(&md, c->d.out_dir, "gi.md", err);
+        sg_verify__tprintf(&g.md, "%s%s%s", g.smd.buf ? g.smd.buf : "", g.fmd.buf ? g.fmd.buf : "",
+                           g.bmd.buf ? g.bmd.buf : "");
+        st = sg_verify__twrite(&g.md, c->d.out_dir, "gi.md", err);
     }
-    c->sum->rows += t.rows + ft.rows;
-    sg_verify__tfree(&t);
-    sg_verify__tfree(&ft);
-    sg_verify__tfree(&md);
-    sg_verify__tfree(&fmd);
-    sg_verify__tfree(&bmd);
+    c->sum->rows += g.csv.rows + g.fcsv.rows;
+    sg_verify__tfree(&g.csv);
+    sg_verify__tfree(&g.fcsv);
+    sg_verify__tfree(&g.md);
+    sg_verify__tfree(&g.smd);
+    sg_verify__tfree(&g.fmd);
+    sg_verify__tfree(&g.bmd);
     return st;
 }

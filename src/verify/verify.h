@@ -37,10 +37,19 @@
  *              time, memory, error.
  *   GI         global illumination where it matters (verify/gi.c): concave
  *              scans seen close up (Lucy, the dragon, the armadillo under
- *              real maps; with `ci` the asset bunny), a ladder of bakes of
- *              both indirect estimators as error against CPU time, the
+ *              real maps, the room lit through its window; with `ci` the
+ *              asset bunny), a ladder of bakes of both indirect estimators
+ *              as error against CPU time on the default MLS surface, the
  *              budget against the reference, and the white furnace on the
- *              same scans, pixel by pixel.
+ *              same scans, pixel by pixel. Then each close-up again with
+ *              every model on the ISO and on the hybrid hierarchy (a
+ *              point-cloud scan cannot be a hybrid: skipped, logged): its
+ *              own reference, the default bake (and s2 64+128 on Lucy's
+ *              torso and the room) against that reference (the error of
+ *              the light: gi.csv reference "own") and against the MLS
+ *              world's (plus the surface's geometric difference:
+ *              reference "mls"), and the default bake's furnace on it
+ *              (gi.csv and furnace.csv column `surface`).
  * Output, in desc.out_dir: stability.csv, surfaces.csv, bake.csv,
  * scaling.csv, headline.csv, gi.csv, furnace.csv, and stability.md,
  * headline.md, gi.md (each written
