@@ -31,15 +31,6 @@ static const uint64_t SCENE_HASH = 0x5ce9e0000000c033ull;
 
 enum { MAX_RANKS = 5 };
 
-static const char *tmp_path(const char *name)
-{
-    static char ring[8][1024];
-    static int next;
-    char *p = ring[next++ % 8];
-    snprintf(p, sizeof ring[0], "%s/%s", sg_test_tmpdir(), name);
-    return p;
-}
-
 /* ---- in-process ranks ------------------------------------------------------ */
 
 /* Ranks that disagree about the rounds would wait for each other forever:
@@ -171,7 +162,7 @@ static void run_ranks(const sg_world *w, const sg_bake_desc *d, int size, int st
     for (int k = 0; k < size; ++k) {
         runs[k] = (rank_run){.h = h, .rank = k, .w = w, .d = *d, .stop_at = k == stop_rank ? stop_at : 0};
         runs[k].d.photons.threads = runs[k].d.gather.threads = 1 + k % 2;
-        snprintf(runs[k].path, sizeof runs[k].path, "%s", tmp_path(tag));
+        snprintf(runs[k].path, sizeof runs[k].path, "%s", sg_test_tmp_path(tag));
         size_t n = strlen(runs[k].path);
         snprintf(runs[k].path + n, sizeof runs[k].path - n, "_rank%d.sgbake", k);
         assert_int_equal(pthread_create(&th[k], NULL, rank_main, &runs[k]), 0);
@@ -207,7 +198,7 @@ static const char *plain_bake(const sg_world *w, const sg_bake_desc *d, const ch
 {
     sg_error err = {0};
     sg_bake *b = NULL;
-    const char *path = tmp_path(tag);
+    const char *path = sg_test_tmp_path(tag);
     if (sg_bake_create(w, d, &b, &err) != SG_OK || sg_bake_save(b, path, SCENE_HASH, &err) != SG_OK)
         fail_msg("plain bake: %s", err.message);
     sg_bake_destroy(b);
@@ -307,7 +298,7 @@ static void test_bake_comm_stop_agreed(void **state)
     if (runs[0].at.stage == SG_BAKE_STAGE_DONE)
         fail_msg("the ranks stopped only when done (%d progress calls on rank 1)", runs[1].calls);
     sg_error err = {0};
-    const char *ckpt = tmp_path("stop3.ckpt");
+    const char *ckpt = sg_test_tmp_path("stop3.ckpt");
     assert_int_equal(sg_bake_job_save(runs[0].job, ckpt, SCENE_HASH, &err), SG_OK);
     for (int k = 0; k < 3; ++k)
         sg_bake_job_destroy(runs[k].job);
@@ -317,7 +308,7 @@ static void test_bake_comm_stop_agreed(void **state)
     assert_int_equal(sg_bake_job_load(ckpt, w, &d2, SCENE_HASH, &j, &err), SG_OK);
     assert_int_equal(sg_bake_job_run(j, NULL, NULL, &err), SG_OK);
     assert_int_equal(sg_bake_job_finish(j, &b, &err), SG_OK);
-    const char *out = tmp_path("stop3_resumed.sgbake");
+    const char *out = sg_test_tmp_path("stop3_resumed.sgbake");
     assert_int_equal(sg_bake_save(b, out, SCENE_HASH, &err), SG_OK);
     assert_same_file(ref, out);
     sg_bake_destroy(b);

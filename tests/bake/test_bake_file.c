@@ -57,15 +57,6 @@
 
 /* ---- helpers ----------------------------------------------------------- */
 
-static const char *tmp_path(const char *name)
-{
-    static char ring[4][1024];
-    static int next;
-    char *p = ring[next++ & 3];
-    snprintf(p, sizeof ring[0], "%s/%s", sg_test_tmpdir(), name);
-    return p;
-}
-
 /* Whole file into a malloc'd buffer; *size its length. */
 static unsigned char *slurp(const char *path, size_t *size)
 {
@@ -166,7 +157,7 @@ static const char SMALL_META[] = "{\"k\":1}";
 
 static const char *write_small(const char *name, uint32_t flags)
 {
-    const char *path = tmp_path(name);
+    const char *path = sg_test_tmp_path(name);
     sg_bake_writer *w = NULL;
     sg_error err = {0};
     sg_bake_writer_desc d = {
@@ -245,7 +236,7 @@ static void test_bake_file_roundtrip(void **state)
     };
     const int nsec = (int)(sizeof secs / sizeof secs[0]);
 
-    const char *path = tmp_path("roundtrip.sgbake");
+    const char *path = sg_test_tmp_path("roundtrip.sgbake");
     sg_error err = {0};
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc d = {.path = path, .scene_hash = SCENE_HASH, .param_hash = PARAM_HASH};
@@ -294,7 +285,7 @@ static void test_bake_file_roundtrip(void **state)
 static void test_bake_file_zero_sections(void **state)
 {
     (void)state;
-    const char *path = tmp_path("empty.sgbake");
+    const char *path = sg_test_tmp_path("empty.sgbake");
     sg_error err = {0};
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc d = {.path = path, .scene_hash = 5, .param_hash = 6, .max_sections = 1};
@@ -332,7 +323,7 @@ static void test_bake_file_large_section(void **state)
         x = x * 1664525u + 1013904223u;
         src[i] = (unsigned char)(x >> 24);
     }
-    const char *path = tmp_path("large.sgbake");
+    const char *path = sg_test_tmp_path("large.sgbake");
     sg_error err = {0};
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc d = {.path = path, .scene_hash = SCENE_HASH};
@@ -370,7 +361,7 @@ static void test_bake_file_large_section(void **state)
 static void test_bake_file_destroy_keeps_old(void **state)
 {
     (void)state;
-    const char *path = tmp_path("keep.sgbake");
+    const char *path = sg_test_tmp_path("keep.sgbake");
     const char old[] = "the previous bake, whatever its bytes";
     spit(path, old, sizeof old);
 
@@ -396,7 +387,7 @@ static void test_bake_file_destroy_keeps_old(void **state)
 static void test_bake_file_commit_replaces(void **state)
 {
     (void)state;
-    const char *path = tmp_path("replace.sgbake");
+    const char *path = sg_test_tmp_path("replace.sgbake");
     spit(path, "old", 3);
     chmod(path, 0640);
     write_small("replace.sgbake", 0);
@@ -428,7 +419,7 @@ static void test_bake_file_every_truncation(void **state)
     sg_bake_file *f = NULL;
     expect_ok(sg_bake_file_open(path, SCENE_HASH, PARAM_HASH, &f, &err), &err, "open");
 
-    const char *cut = tmp_path("trunc.sgbake");
+    const char *cut = sg_test_tmp_path("trunc.sgbake");
     char what[64];
     for (size_t len = 0; len < n; len++) {
         spit(cut, full, len);
@@ -460,7 +451,7 @@ static void test_bake_file_every_byte_damage(void **state)
     size_t n;
     unsigned char *full = slurp(path, &n);
     unsigned char *bad = malloc(n);
-    const char *dpath = tmp_path("damage.sgbake");
+    const char *dpath = sg_test_tmp_path("damage.sgbake");
     static const unsigned char masks[3] = {0x01, 0x80, 0xff};
     int at_open = 0, at_read = 0;
     for (size_t off = 0; off < n; off++)
@@ -525,7 +516,7 @@ static void test_bake_file_newer_version(void **state)
     unsigned char *b = slurp(path, &n);
     set32(b + 8, 7);
     fix_crcs(b);
-    const char *p = tmp_path("version7.sgbake");
+    const char *p = sg_test_tmp_path("version7.sgbake");
     spit(p, b, n);
     open_fails(p, SCENE_HASH, PARAM_HASH, SG_ERR_UNSUPPORTED,
                "format version 7 is newer than this build reads (1)", "version 7");
@@ -552,15 +543,15 @@ static void test_bake_file_not_a_bake_file(void **state)
     (void)state;
     static const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13,
                                         'I',  'H', 'D', 'R', 0,    0,    0,    1,    0, 0, 0, 1};
-    spit(tmp_path("image.sgbake"), png, sizeof png);
-    open_fails(tmp_path("image.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file", "PNG header");
+    spit(sg_test_tmp_path("image.sgbake"), png, sizeof png);
+    open_fails(sg_test_tmp_path("image.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file", "PNG header");
     const char text[] = "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n";
-    spit(tmp_path("text.sgbake"), text, sizeof text - 1);
-    open_fails(tmp_path("text.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file", "PLY text");
-    spit(tmp_path("zero.sgbake"), "", 0);
-    open_fails(tmp_path("zero.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file (it is empty)",
+    spit(sg_test_tmp_path("text.sgbake"), text, sizeof text - 1);
+    open_fails(sg_test_tmp_path("text.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file", "PLY text");
+    spit(sg_test_tmp_path("zero.sgbake"), "", 0);
+    open_fails(sg_test_tmp_path("zero.sgbake"), 0, 0, SG_ERR_CORRUPT, "not a splatgi bake file (it is empty)",
                "empty file");
-    open_fails(tmp_path("absent.sgbake"), 0, 0, SG_ERR_IO, "cannot open", "absent file");
+    open_fails(sg_test_tmp_path("absent.sgbake"), 0, 0, SG_ERR_IO, "cannot open", "absent file");
     open_fails(sg_test_tmpdir(), 0, 0, SG_ERR_IO, "not a regular file", "a folder");
 }
 
@@ -576,7 +567,7 @@ static void test_bake_file_malformed_fixtures(void **state)
     size_t n;
     unsigned char *orig = slurp(src, &n);
     unsigned char *b = malloc(n + 64);
-    const char *p = tmp_path("malformed.sgbake");
+    const char *p = sg_test_tmp_path("malformed.sgbake");
     struct {
         const char *name;
         int field;       /* what to patch, see the switch */
@@ -653,7 +644,7 @@ static void test_bake_file_malformed_fixtures(void **state)
 static void test_bake_file_missing_folder(void **state)
 {
     (void)state;
-    const char *path = tmp_path("no_such_folder/bunny.sgbake");
+    const char *path = sg_test_tmp_path("no_such_folder/bunny.sgbake");
     sg_error err = {0};
     sg_bake_writer *w = (sg_bake_writer *)&w;
     sg_bake_writer_desc d = {.path = path};
@@ -662,7 +653,7 @@ static void test_bake_file_missing_folder(void **state)
         fail_msg("got %s \"%s\", want SG_ERR_IO naming %s", sg_status_name(st), err.message, path);
     assert_ptr_equal(w, (sg_bake_writer *)&w);
     struct stat sb;
-    assert_int_not_equal(stat(tmp_path("no_such_folder"), &sb), 0);
+    assert_int_not_equal(stat(sg_test_tmp_path("no_such_folder"), &sb), 0);
     assert_int_equal(count_temp_files(), 0);
 
     d.path = "";
@@ -680,7 +671,7 @@ static void expect_status(sg_status st, const sg_error *err, sg_status want, con
 static void test_bake_file_writer_misuse(void **state)
 {
     (void)state;
-    const char *path = tmp_path("misuse.sgbake");
+    const char *path = sg_test_tmp_path("misuse.sgbake");
     sg_error err = {0};
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc d = {.path = path, .max_sections = 2};
@@ -742,7 +733,7 @@ static void test_bake_file_writer_misuse(void **state)
 static void test_bake_file_write_failure(void **state)
 {
     (void)state;
-    const char *path = tmp_path("efbig.sgbake");
+    const char *path = sg_test_tmp_path("efbig.sgbake");
     const char old[] = "previous complete bake";
     spit(path, old, sizeof old);
 
@@ -806,7 +797,7 @@ static void test_bake_file_read_misuse(void **state)
 static void test_bake_file_kinds_and_views(void **state)
 {
     (void)state;
-    const char *path = tmp_path("kind.sgworld");
+    const char *path = sg_test_tmp_path("kind.sgworld");
     sg_error err = {0};
     sg_bake_writer *w = NULL;
     sg_bake_writer_desc wd = {.path = path, .scene_hash = SCENE_HASH, .param_hash = PARAM_HASH,

@@ -29,15 +29,6 @@
 
 static const uint64_t SCENE_HASH = 0x5ce9e0000000001ull;
 
-static const char *tmp_path(const char *name)
-{
-    static char ring[8][1024];
-    static int next;
-    char *p = ring[next++ % 8];
-    snprintf(p, sizeof ring[0], "%s/%s", sg_test_tmpdir(), name);
-    return p;
-}
-
 /* A sphere of `sphere_points` splats over a ground of 3000. */
 static sg_world *small_world(int sphere_points)
 {
@@ -93,12 +84,12 @@ static unsigned char *read_all(const char *path, size_t *size)
     return buf;
 }
 
-/* Saves b under tmp_path(name) and checks the file is the same bytes as
+/* Saves b under sg_test_tmp_path(name) and checks the file is the same bytes as
  * the file at `expected`. */
 static void assert_saves_as(const sg_bake *b, const char *name, const char *expected)
 {
     sg_error err = {0};
-    const char *path = tmp_path(name);
+    const char *path = sg_test_tmp_path(name);
     if (sg_bake_save(b, path, SCENE_HASH, &err) != SG_OK)
         fail_msg("save %s: %s", path, err.message);
     size_t n1, n2;
@@ -148,7 +139,7 @@ static void test_bake_io_roundtrip(void **state)
     (void)state;
     sg_world *w = small_world(4000);
     sg_bake *b = make_bake(w, 40000);
-    const char *path = tmp_path("round.sgbake");
+    const char *path = sg_test_tmp_path("round.sgbake");
     sg_error err = {0};
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
     sg_bake *c = NULL;
@@ -226,7 +217,7 @@ static void test_bake_io_other_scene(void **state)
     (void)state;
     sg_world *w = small_world(2000);
     sg_bake *b = make_bake(w, 8192);
-    const char *path = tmp_path("scene.sgbake");
+    const char *path = sg_test_tmp_path("scene.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     expect_load_fails(path, w, SCENE_HASH + 1, SG_ERR_INVALID_ARG, "made for another scene");
     sg_bake_destroy(b);
@@ -240,21 +231,21 @@ static void test_bake_io_truncated_or_corrupt(void **state)
     (void)state;
     sg_world *w = small_world(2000);
     sg_bake *b = make_bake(w, 8192);
-    const char *path = tmp_path("good.sgbake");
+    const char *path = sg_test_tmp_path("good.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     size_t n;
     unsigned char *bytes = read_all(path, &n);
     const size_t cuts[] = {0, 10, 47, 48, 100, n / 2, n - 1};
     for (size_t i = 0; i < sizeof cuts / sizeof cuts[0]; ++i) {
-        const char *cut = tmp_path("cut.sgbake");
+        const char *cut = sg_test_tmp_path("cut.sgbake");
         write_all(cut, bytes, cuts[i]);
         expect_load_fails(cut, w, SCENE_HASH, SG_ERR_CORRUPT, NULL);
     }
-    const char *flipped = tmp_path("flip.sgbake");
+    const char *flipped = sg_test_tmp_path("flip.sgbake");
     bytes[n - 5] ^= 0x40; /* inside the last irradiance section */
     write_all(flipped, bytes, n);
     expect_load_fails(flipped, w, SCENE_HASH, SG_ERR_CORRUPT, "checksum mismatch");
-    expect_load_fails(tmp_path("missing.sgbake"), w, SCENE_HASH, SG_ERR_IO, NULL);
+    expect_load_fails(sg_test_tmp_path("missing.sgbake"), w, SCENE_HASH, SG_ERR_IO, NULL);
     free(bytes);
     sg_bake_destroy(b);
     sg_world_destroy(w);
@@ -270,7 +261,7 @@ static void test_bake_io_splat_count_mismatch(void **state)
     size_t have = sg_scene_sites(sg_world_scene(w, 0))->count, want = sg_scene_sites(sg_world_scene(w2, 0))->count;
     assert_true(have != want);
     sg_bake *b = make_bake(w, 8192);
-    const char *path = tmp_path("count.sgbake");
+    const char *path = sg_test_tmp_path("count.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     char msg[256];
     snprintf(msg, sizeof msg, "%s: model 0 has %zu light sites in the bake, %zu in the scene", path, have, want);
@@ -319,7 +310,7 @@ static void test_bake_io_bad_values(void **state)
     (void)state;
     sg_world *w = small_world(2000);
     sg_bake *b = make_bake(w, 8192);
-    const char *path = tmp_path("values.sgbake"), *bad = tmp_path("bad.sgbake");
+    const char *path = sg_test_tmp_path("values.sgbake"), *bad = sg_test_tmp_path("bad.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     char msg[256];
     rewrite(path, bad, "E001", SG_BAKE_SPLAT_FLOATS * 17 + 1, NAN, 0);
@@ -367,7 +358,7 @@ static void test_bake_io_glossy_roundtrip(void **state)
     (void)state;
     sg_world *w = glossy_world();
     sg_bake *b = make_glossy_bake(w);
-    const char *path = tmp_path("glossy.sgbake");
+    const char *path = sg_test_tmp_path("glossy.sgbake");
     sg_error err = {0};
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
     sg_bake *c = NULL;
@@ -430,7 +421,7 @@ static void test_bake_io_glossy_corrupt(void **state)
     (void)state;
     sg_world *w = glossy_world();
     sg_bake *b = make_glossy_bake(w);
-    const char *path = tmp_path("gbad.sgbake"), *bad = tmp_path("gbad2.sgbake");
+    const char *path = sg_test_tmp_path("gbad.sgbake"), *bad = sg_test_tmp_path("gbad2.sgbake");
     assert_int_equal(sg_bake_save(b, path, SCENE_HASH, NULL), SG_OK);
     sg_bake_file *f = NULL;
     assert_int_equal(sg_bake_file_open(path, 0, 0, &f, NULL), SG_OK);
@@ -485,7 +476,7 @@ static void test_bake_io_photons_in_parts_equal_one_pass(void **state)
     sg_bake *b1 = NULL, *b2 = NULL;
     assert_int_equal(sg_bake_create_from_photons(w, &d, &one, &b1, &err), SG_OK);
     assert_int_equal(sg_bake_create_from_photons(w, &d, &parts, &b2, &err), SG_OK);
-    const char *p1 = tmp_path("one.sgbake");
+    const char *p1 = sg_test_tmp_path("one.sgbake");
     assert_int_equal(sg_bake_save(b1, p1, SCENE_HASH, &err), SG_OK);
     assert_saves_as(b2, "parts.sgbake", p1);
     sg_bake *b3 = make_bake(w, 100000); /* sg_bake_create, one call */
@@ -547,7 +538,7 @@ static void check_resume_everywhere(sg_bake_indirect indirect)
     sg_bake *whole = NULL;
     assert_int_equal(sg_bake_job_finish(j, &whole, &err), SG_OK);
     sg_bake_job_destroy(j);
-    const char *ref = tmp_path("whole.sgbake");
+    const char *ref = sg_test_tmp_path("whole.sgbake");
     assert_int_equal(sg_bake_save(whole, ref, SCENE_HASH, &err), SG_OK);
     sg_bake_destroy(whole);
     assert_true(all->n > 8 && all->n < 4096);
@@ -567,7 +558,7 @@ static void check_resume_everywhere(sg_bake_indirect indirect)
             continue;
         }
         assert_int_equal(st, SG_ERR_CANCELLED);
-        const char *ckpt = tmp_path("job.ckpt");
+        const char *ckpt = sg_test_tmp_path("job.ckpt");
         if (sg_bake_job_save(j, ckpt, SCENE_HASH, &err) != SG_OK)
             fail_msg("save at call %d (stage %d, level %d): %s", k, (int)p->stage, p->level, err.message);
         sg_bake_job_destroy(j);
@@ -641,7 +632,7 @@ static void test_bake_io_checkpoint_checks(void **state)
                       .progress_seconds = -1.0}, .direct_samples = 8, .gather_rays = 8, .glossy_rays = 16};
     sg_error err = {0};
     sg_bake_job *out = NULL;
-    const char *ckpt = tmp_path("checks.ckpt"), *sites = tmp_path("sites.ckpt"), *gl = tmp_path("glossy.ckpt");
+    const char *ckpt = sg_test_tmp_path("checks.ckpt"), *sites = sg_test_tmp_path("sites.ckpt"), *gl = sg_test_tmp_path("glossy.ckpt");
     save_stopped(w, &d, SG_BAKE_STAGE_PHOTONS, ckpt);
     sg_bake_desc other = d;
     other.photons.seed = 8;
@@ -653,7 +644,7 @@ static void test_bake_io_checkpoint_checks(void **state)
     assert_non_null(strstr(err.message, "made for another scene"));
     expect_load_fails(ckpt, w, SCENE_HASH, SG_ERR_INVALID_ARG, "a checkpoint of an unfinished bake");
     /* a record's flux made negative (with fresh CRCs), then a flipped byte, then half a file */
-    const char *bad = tmp_path("bad.ckpt");
+    const char *bad = sg_test_tmp_path("bad.ckpt");
     rewrite(ckpt, bad, "PHFG", 0, -2.0f, SG_BAKE_FLAG_CHECKPOINT);
     assert_int_equal(sg_bake_job_load(bad, w, &d, SCENE_HASH, &out, &err), SG_ERR_CORRUPT);
     assert_non_null(strstr(err.message, "photon record 0: its flux is not finite and >= 0"));
@@ -693,7 +684,7 @@ static void test_bake_io_checkpoint_checks(void **state)
     /* a finished bake is not a checkpoint */
     sg_bake *b = NULL;
     assert_int_equal(sg_bake_create(w, &d, &b, &err), SG_OK);
-    const char *bk = tmp_path("checks.sgbake");
+    const char *bk = sg_test_tmp_path("checks.sgbake");
     assert_int_equal(sg_bake_save(b, bk, SCENE_HASH, &err), SG_OK);
     assert_int_equal(sg_bake_job_load(bk, w, &d, SCENE_HASH, &out, &err), SG_ERR_INVALID_ARG);
     assert_non_null(strstr(err.message, "a finished bake, not a checkpoint"));

@@ -20,6 +20,15 @@ const char *sg_test_tmpdir(void)
     return dir;
 }
 
+const char *sg_test_tmp_path(const char *name)
+{
+    static char ring[8][1024];
+    static int next;
+    char *p = ring[next++ % 8];
+    snprintf(p, sizeof ring[0], "%s/%s", sg_test_tmpdir(), name);
+    return p;
+}
+
 const char *sg_test_write_file(const char *name, const void *data, size_t size)
 {
     static char path[1024];

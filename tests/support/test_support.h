@@ -23,6 +23,10 @@ void *sg_test_read_file(const char *path, size_t *size);
 /* Path of a fresh, empty temporary folder for this test binary. */
 const char *sg_test_tmpdir(void);
 
+/* sg_test_tmpdir()/name in one of 8 rotating buffers (so a call can name
+ * several paths at once). */
+const char *sg_test_tmp_path(const char *name);
+
 /* Path of a file under ../shared/data, or NULL (with a message on stderr
  * saying the test is skipped) when the folder or file is absent. */
 const char *sg_test_shared_data(const char *relpath);

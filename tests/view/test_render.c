@@ -31,6 +31,16 @@ static sg_camera camera(sg_vec3 eye, sg_vec3 look, float aspect)
     return c;
 }
 
+/* A bake of w with desc bd, or the test fails with its message. */
+static sg_bake *bake_of(const sg_world *w, const sg_bake_desc *bd)
+{
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, bd, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    return b;
+}
+
 /* sg_view_render gives sg_bake_render's image bit for bit, on 1 and 2
  * threads, for views from far, close and grazing. */
 static void test_view_render_matches_bake_render(void **state)
@@ -38,10 +48,8 @@ static void test_view_render_matches_bake_render(void **state)
     (void)state;
     sg_world *w = sg_test_world_from_json(SCENE);
     sg_bake_desc bd = {.photons = {.count = 20000, .seed = 3}, .direct_samples = 2};
-    sg_bake *b = NULL;
+    sg_bake *b = bake_of(w, &bd);
     sg_error err = {0};
-    if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
-        fail_msg("bake: %s", err.message);
     const sg_vec3 eyes[3] = {sg_v3(0, 3, 6), sg_v3(0.8f, 1.4f, 1.6f), sg_v3(-5, 0.2f, 3)};
     const int W = 67, H = 45; /* not multiples of the tile size */
     for (int v = 0; v < 3; ++v)
@@ -127,10 +135,8 @@ static void test_view_render_aa_off_is_plain(void **state)
     (void)state;
     sg_world *w = sg_test_world_from_json(SCENE);
     sg_bake_desc bd = {.photons = {.count = 20000, .seed = 3}, .direct_samples = 2};
-    sg_bake *b = NULL;
+    sg_bake *b = bake_of(w, &bd);
     sg_error err = {0};
-    if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
-        fail_msg("bake: %s", err.message);
     const int W = 37, H = 29;
     sg_bake_frame_desc fd = {.camera = camera(sg_v3(0.8f, 1.4f, 1.6f), sg_v3(0, 0.8f, 0), (float)W / (float)H),
                              .width = W, .height = H, .threads = 2};
@@ -189,10 +195,8 @@ static void test_view_render_aa_edge(void **state)
         "\"use_point_colors\":false},\"surface\":{\"model\":\"hybrid\"}}],"
         "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
     sg_bake_desc bd = {.photons = {.seed = 5}};
-    sg_bake *b = NULL;
+    sg_bake *b = bake_of(w, &bd);
     sg_error err = {0};
-    if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
-        fail_msg("bake: %s", err.message);
     const sg_aabb box = sg_world_bounds(w);
     const int W = 64, H = 48;
     sg_camera cam;
