@@ -220,19 +220,23 @@ static sg_status make_world(const vctx *c, const closeup *cu, size_t points, int
                  points, albedo, albedo, albedo, surf, points / 4, albedo, albedo, albedo, surf);
     } else if (cu->mesh) {
         snprintf(mesh, sizeof mesh, "%s/%s", c->d.data_dir, cu->mesh);
-        /* read whole: its box places it, its triangles say whether it
-         * can be a hybrid */
-        sg_mesh m = {0};
+        /* its box places it; only a surface that needs triangles reads
+         * the whole file to see whether it has any */
+        sg_aabb b;
         sg_ground_placement pl;
-        sg_status st = sg_mesh_read(mesh, &m, err);
+        sg_status st = sg_mesh_read_bounds(mesh, &b, err);
         if (st != SG_OK)
             return st;
-        sg_aabb b = sg_mesh_bounds(&m);
-        size_t triangles = m.triangle_count;
-        sg_mesh_free(&m);
-        if (gs->needs_triangles && triangles == 0) {
-            *skip = "the scan is a point cloud (no triangles)";
-            return SG_OK;
+        if (gs->needs_triangles) {
+            sg_mesh m = {0};
+            if ((st = sg_mesh_read(mesh, &m, err)) != SG_OK)
+                return st;
+            size_t triangles = m.triangle_count;
+            sg_mesh_free(&m);
+            if (triangles == 0) {
+                *skip = "the scan is a point cloud (no triangles)";
+                return SG_OK;
+            }
         }
         if ((st = sg_mesh_ground_placement(b, SCENE_LENGTH, &pl, err)) != SG_OK)
             return st;
