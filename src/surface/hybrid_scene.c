@@ -12,6 +12,8 @@
 
 #include <assert.h>
 #include <math.h>
+#include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -36,40 +38,71 @@ static int usable_normal(sg_vec3 n)
     return isfinite(l) && fabsf(l - 1.0f) < 1e-3f;
 }
 
+/* reach[v] = max(reach[v], e) for e >= 0, from any thread. The maximum
+ * of a set does not depend on the order it is taken in, so the result is
+ * the serial loop's whatever the threads; a non-negative float's bits
+ * order as the float does, so the slot holds bits and a CAS retries
+ * until e is no longer larger. NaN never stores (as fmaxf ignores it). */
+static void reach_max(_Atomic uint32_t *slot, float e)
+{
+    uint32_t cur = atomic_load_explicit(slot, memory_order_relaxed), eb;
+    memcpy(&eb, &e, sizeof eb);
+    for (;;) {
+        float cf;
+        memcpy(&cf, &cur, sizeof cf);
+        if (!(e > cf))
+            return;
+        if (atomic_compare_exchange_weak_explicit(slot, &cur, eb, memory_order_relaxed, memory_order_relaxed))
+            return;
+    }
+}
+
+/* Sites are independent of one another, so both passes run in parallel
+ * (OpenMP, static schedule) and every site is computed exactly as the
+ * serial loop would (bit for bit on any thread count: test_hybrid
+ * threads_identical). The dragon's 1.3M sites took 0.21 s serially, half
+ * of its world file's load. */
 sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_error *err)
 {
     memset(out, 0, sizeof *out);
     const size_t nv = h->vertex_count, n = sg_hybrid_site_count(h);
+    const ptrdiff_t nt = (ptrdiff_t)h->info.triangle_count, ns = (ptrdiff_t)n, nvv = (ptrdiff_t)nv;
     float *d = sg_alloc_array(n, CHANNELS * sizeof(float));
-    float *reach = sg_calloc_array(nv, sizeof(float));
-    if (!d || !reach) {
+    _Atomic uint32_t *reach = sg_alloc_array(nv, sizeof *reach);
+    if (!d || (nv && !reach)) {
         sg_free(d);
-        sg_free(reach);
+        sg_free((void *)reach);
         return sg_error_set(err, SG_ERR_NOMEM, "hybrid: out of memory for %zu light sites", n);
     }
     float *px = d, *py = d + n, *pz = d + 2 * n, *nx = d + 3 * n, *ny = d + 4 * n, *nz = d + 5 * n;
     float *rad = d + 6 * n, *ar = d + 7 * n, *ag = d + 8 * n, *ab = d + 9 * n;
+#pragma omp parallel for schedule(static)
+    for (ptrdiff_t i = 0; i < nvv; ++i)
+        atomic_init(&reach[i], 0u); /* the bits of 0.0f */
     /* A vertex's reach: its longest traced edge, so its light spans the
-     * triangles it is interpolated over (in leaf order: deterministic). */
-    for (size_t i = 0; i < h->info.triangle_count; ++i) {
-        const uint32_t *v = h->tri + 3 * i;
+     * triangles it is interpolated over. */
+#pragma omp parallel for schedule(static)
+    for (ptrdiff_t i = 0; i < nt; ++i) {
+        const uint32_t *v = h->tri + 3 * (size_t)i;
         for (int k = 0; k < 3; ++k) {
             const float *a = h->pos + 3 * (size_t)v[k], *b = h->pos + 3 * (size_t)v[(k + 1) % 3];
             float e = sqrtf((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
                             (a[2] - b[2]) * (a[2] - b[2]));
-            reach[v[k]] = fmaxf(reach[v[k]], e);
-            reach[v[(k + 1) % 3]] = fmaxf(reach[v[(k + 1) % 3]], e);
+            reach_max(&reach[v[k]], e);
+            reach_max(&reach[v[(k + 1) % 3]], e);
         }
     }
-    size_t first_real = SIZE_MAX;
-    for (size_t i = 0; i < n; ++i) {
+    ptrdiff_t first_real = PTRDIFF_MAX;
+#pragma omp parallel for schedule(static) reduction(min : first_real)
+    for (ptrdiff_t i = 0; i < ns; ++i) {
         sg_vec3 p, nn;
         float r = 0.0f;
         int ok = sg_hybrid_site(h, (uint32_t)i, &p, &nn) && usable_normal(nn) && sg_v3_isfinite(p);
-        if (ok && i < nv) {
-            r = reach[i];
+        if (ok && i < nvv) {
+            const uint32_t bits = atomic_load_explicit(&reach[i], memory_order_relaxed);
+            memcpy(&r, &bits, sizeof r);
         } else if (ok) {
-            const uint32_t k = (uint32_t)(i - nv);
+            const uint32_t k = (uint32_t)((size_t)i - nv);
             const sg_stree_bundle *B = &h->tree.bundles[k / SG_STREE_WIDTH];
             r = sg_hybrid_node_radius(h, k);
             ok = B->sin_cone[k % SG_STREE_WIDTH] != 255; /* never hit as a point */
@@ -77,30 +110,31 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
         ok = ok && r > 0.0f && isfinite(r);
         sg_vec3 c = sg_v3(1.0f, 1.0f, 1.0f);
         if (ok && h->vcolor) {
-            const float *col = i < nv ? h->vcolor + 3 * i : h->tree.colors + 3 * (i - nv);
+            const float *col = i < nvv ? h->vcolor + 3 * i : h->tree.colors + 3 * ((size_t)i - nv);
             c = sg_v3(col[0], col[1], col[2]);
         }
         if (!ok) {
             rad[i] = -1.0f; /* stand-in, filled below */
             continue;
         }
-        if (first_real == SIZE_MAX)
+        if (i < first_real)
             first_real = i;
         px[i] = p.x, py[i] = p.y, pz[i] = p.z;
         nx[i] = nn.x, ny[i] = nn.y, nz[i] = nn.z;
         rad[i] = r;
         ar[i] = c.x, ag[i] = c.y, ab[i] = c.z;
     }
-    sg_free(reach);
+    sg_free((void *)reach);
     /* create() keeps at least one triangle of non-zero area, and its
      * vertices have normals: there is a real site. */
-    if (first_real == SIZE_MAX) {
+    if (first_real == PTRDIFF_MAX) {
         sg_free(d);
         return sg_error_set(err, SG_ERR_INVALID_ARG, "hybrid: no vertex has a usable normal");
     }
-    for (size_t i = 0; i < n; ++i)
+    const size_t j = (size_t)first_real;
+#pragma omp parallel for schedule(static)
+    for (ptrdiff_t i = 0; i < ns; ++i)
         if (rad[i] < 0.0f) {
-            const size_t j = first_real;
             px[i] = px[j], py[i] = py[j], pz[i] = pz[j];
             nx[i] = nx[j], ny[i] = ny[j], nz[i] = nz[j];
             rad[i] = rad[j];
