@@ -8,14 +8,20 @@
  *     in leaf order; a node hit's splat >= vertex_count;
  *  3. queries read the hierarchy and the sites only (thread-safe).
  */
+/* madvise(MADV_HUGEPAGE) is outside POSIX: glibc declares it with this. */
+#define _DEFAULT_SOURCE
 #include "surface/hybrid_scene.h"
 
 #include <assert.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+
+#include <omp.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "core/alloc.h"
 #include "surface/hybrid_int.h"
@@ -38,58 +44,76 @@ static int usable_normal(sg_vec3 n)
     return isfinite(l) && fabsf(l - 1.0f) < 1e-3f;
 }
 
-/* reach[v] = max(reach[v], e) for e >= 0, from any thread. The maximum
- * of a set does not depend on the order it is taken in, so the result is
- * the serial loop's whatever the threads; a non-negative float's bits
- * order as the float does, so the slot holds bits and a CAS retries
- * until e is no longer larger. NaN never stores (as fmaxf ignores it). */
-static void reach_max(_Atomic uint32_t *slot, float e)
+/* Asks for transparent huge pages over the whole 2 MiB pages inside
+ * [p, p + bytes), before anything is written there. The sites' arrays are
+ * fresh memory written once; under the virtual machines we measure on, a
+ * 4 KiB page fault costs ~10 us, and the dragon's 32 MiB of sites took
+ * 145-220 ms of page faults against 55-75 ms with huge pages (one
+ * thread; docs/hybrid.md). Advice only: where it is refused or absent,
+ * nothing changes but the time. */
+static void advise_huge_pages(void *p, size_t bytes)
 {
-    uint32_t cur = atomic_load_explicit(slot, memory_order_relaxed), eb;
-    memcpy(&eb, &e, sizeof eb);
-    for (;;) {
-        float cf;
-        memcpy(&cf, &cur, sizeof cf);
-        if (!(e > cf))
-            return;
-        if (atomic_compare_exchange_weak_explicit(slot, &cur, eb, memory_order_relaxed, memory_order_relaxed))
-            return;
-    }
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    const uintptr_t huge = (uintptr_t)2 << 20;
+    const uintptr_t a0 = ((uintptr_t)p + huge - 1) & ~(huge - 1), a1 = ((uintptr_t)p + bytes) & ~(huge - 1);
+    if (a1 > a0)
+        (void)madvise((void *)a0, (size_t)(a1 - a0), MADV_HUGEPAGE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
 }
 
-/* Sites are independent of one another, so both passes run in parallel
- * (OpenMP, static schedule) and every site is computed exactly as the
- * serial loop would (bit for bit on any thread count: test_hybrid
- * threads_identical). The dragon's 1.3M sites took 0.21 s serially, half
- * of its world file's load. */
+/* Sites are independent of one another, so the passes run in parallel
+ * (OpenMP) and every site is computed exactly as the serial loop would
+ * (bit for bit on any thread count: test_hybrid sites_threads_identical).
+ * At a world file's load this was half the time (the dragon's 805k sites,
+ * 0.2 s), nearly all of it page faults on the fresh sites array: hence
+ * huge pages, and the faults shared between the threads. */
 sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_error *err)
 {
     memset(out, 0, sizeof *out);
     const size_t nv = h->vertex_count, n = sg_hybrid_site_count(h);
     const ptrdiff_t nt = (ptrdiff_t)h->info.triangle_count, ns = (ptrdiff_t)n, nvv = (ptrdiff_t)nv;
     float *d = sg_alloc_array(n, CHANNELS * sizeof(float));
-    _Atomic uint32_t *reach = sg_alloc_array(nv, sizeof *reach);
+    float *reach = sg_alloc_array(nv, sizeof *reach);
     if (!d || (nv && !reach)) {
         sg_free(d);
-        sg_free((void *)reach);
+        sg_free(reach);
         return sg_error_set(err, SG_ERR_NOMEM, "hybrid: out of memory for %zu light sites", n);
     }
+    advise_huge_pages(d, n * CHANNELS * sizeof(float));
     float *px = d, *py = d + n, *pz = d + 2 * n, *nx = d + 3 * n, *ny = d + 4 * n, *nz = d + 5 * n;
     float *rad = d + 6 * n, *ar = d + 7 * n, *ag = d + 8 * n, *ab = d + 9 * n;
-#pragma omp parallel for schedule(static)
-    for (ptrdiff_t i = 0; i < nvv; ++i)
-        atomic_init(&reach[i], 0u); /* the bits of 0.0f */
     /* A vertex's reach: its longest traced edge, so its light spans the
-     * triangles it is interpolated over. */
-#pragma omp parallel for schedule(static)
-    for (ptrdiff_t i = 0; i < nt; ++i) {
-        const uint32_t *v = h->tri + 3 * (size_t)i;
-        for (int k = 0; k < 3; ++k) {
-            const float *a = h->pos + 3 * (size_t)v[k], *b = h->pos + 3 * (size_t)v[(k + 1) % 3];
-            float e = sqrtf((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                            (a[2] - b[2]) * (a[2] - b[2]));
-            reach_max(&reach[v[k]], e);
-            reach_max(&reach[v[(k + 1) % 3]], e);
+     * triangles it is interpolated over. Each thread owns a range of
+     * vertices and reads every triangle, updating only its own: no two
+     * threads write one slot, and a maximum does not depend on the order
+     * it is taken in, so the result is the serial loop's on any thread
+     * count (an atomic max instead took twice the serial time on one
+     * thread: test_hybrid sites_threads_identical, docs/hybrid.md). */
+#pragma omp parallel
+    {
+        const size_t nth = (size_t)omp_get_num_threads(), me = (size_t)omp_get_thread_num();
+        const size_t lo = nv / nth * me + (me < nv % nth ? me : nv % nth);
+        const size_t span = nv / nth + (me < nv % nth ? 1 : 0);
+        for (size_t i = lo; i < lo + span; ++i)
+            reach[i] = 0.0f;
+        for (ptrdiff_t i = 0; i < nt; ++i) {
+            const uint32_t *v = h->tri + 3 * (size_t)i;
+            for (int k = 0; k < 3; ++k) {
+                const size_t va = v[k], vb = v[(k + 1) % 3];
+                const int mine_a = va - lo < span, mine_b = vb - lo < span; /* unsigned: va >= lo too */
+                if (!mine_a && !mine_b)
+                    continue;
+                const float *a = h->pos + 3 * va, *b = h->pos + 3 * vb;
+                float e = sqrtf((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                                (a[2] - b[2]) * (a[2] - b[2]));
+                if (mine_a)
+                    reach[va] = e > reach[va] ? e : reach[va]; /* fmaxf: a NaN e is ignored */
+                if (mine_b)
+                    reach[vb] = e > reach[vb] ? e : reach[vb];
+            }
         }
     }
     ptrdiff_t first_real = PTRDIFF_MAX;
@@ -99,8 +123,7 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
         float r = 0.0f;
         int ok = sg_hybrid_site(h, (uint32_t)i, &p, &nn) && usable_normal(nn) && sg_v3_isfinite(p);
         if (ok && i < nvv) {
-            const uint32_t bits = atomic_load_explicit(&reach[i], memory_order_relaxed);
-            memcpy(&r, &bits, sizeof r);
+            r = reach[i];
         } else if (ok) {
             const uint32_t k = (uint32_t)((size_t)i - nv);
             const sg_stree_bundle *B = &h->tree.bundles[k / SG_STREE_WIDTH];
@@ -124,7 +147,7 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
         rad[i] = r;
         ar[i] = c.x, ag[i] = c.y, ab[i] = c.z;
     }
-    sg_free((void *)reach);
+    sg_free(reach);
     /* create() keeps at least one triangle of non-zero area, and its
      * vertices have normals: there is a real site. */
     if (first_real == PTRDIFF_MAX) {
