@@ -49,10 +49,21 @@
  *                                  (full detail) and absent: parsed as
  *                                  2, -1, the default; written and read
  *                                  back the same, hash for hash.
+ * 14. hybrid::sites_threads_identical  sg_hybrid_sites_create (parallel)
+ *                                  on 1 and 2 threads: every site's 10
+ *                                  channels equal byte for byte, stand-ins
+ *                                  included.
+ * 15. hybrid::albedo_is_site_blend  sg_scene_hit_albedo (which skips the
+ *                                  colour reads when every site is white)
+ *                                  equals the blend of the hit's sites'
+ *                                  colours by its weights, bit for bit, on
+ *                                  random rays (triangle and LOD hits,
+ *                                  misses), with and without colours.
  */
 #include "test_support.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -62,6 +73,7 @@
 #include "math/triangle.h"
 #include "surface/hybrid.h"
 #include "surface/hybrid_int.h" /* the bundles, for the kernel comparison */
+#include "surface/hybrid_scene.h"
 #include "surface/scene.h"
 #include "io/scene_file.h"
 #include "render/world.h"
@@ -902,6 +914,97 @@ static void test_hybrid_scene_file_roundtrip(void **state)
     sg_scene_file_free(&sf);
 }
 
+/* ---- 14: parallel sites ---------------------------------------------------- */
+
+static void test_hybrid_sites_threads_identical(void **state)
+{
+    (void)state;
+    /* coloured, so the colour channels carry data too */
+    sg_mesh m = fine_sphere();
+    m.colors = sg_alloc_array(m.vertex_count, 3 * sizeof(float));
+    assert_non_null(m.colors);
+    for (size_t i = 0; i < 3 * m.vertex_count; ++i)
+        m.colors[i] = 0.5f + 0.5f * m.positions[i];
+    sg_hybrid *h = build(&m, 0);
+    sg_hybrid_sites s[2];
+    sg_error err = {0};
+    const int saved = omp_get_max_threads();
+    for (int k = 0; k < 2; ++k) {
+        omp_set_num_threads(k + 1);
+        if (sg_hybrid_sites_create(h, &s[k], &err) != SG_OK)
+            fail_msg("sg_hybrid_sites_create on %d threads: %s", k + 1, err.message);
+    }
+    omp_set_num_threads(saved);
+    assert_int_equal(s[0].view.count, s[1].view.count);
+    const size_t n = s[0].view.count;
+    size_t stand_ins = 0;
+    for (size_t i = 1; i < n; ++i) /* stand-ins copy the first real site */
+        stand_ins += memcmp(&s[0].view.px[i], &s[0].view.px[0], sizeof(float)) == 0 &&
+                     memcmp(&s[0].view.radius[i], &s[0].view.radius[0], sizeof(float)) == 0;
+    assert_true(stand_ins > 0); /* the comparison covers them */
+    const float *a[10] = {s[0].view.px, s[0].view.py, s[0].view.pz, s[0].view.nx, s[0].view.ny,
+                          s[0].view.nz, s[0].view.radius, s[0].view.ar, s[0].view.ag, s[0].view.ab};
+    const float *b[10] = {s[1].view.px, s[1].view.py, s[1].view.pz, s[1].view.nx, s[1].view.ny,
+                          s[1].view.nz, s[1].view.radius, s[1].view.ar, s[1].view.ag, s[1].view.ab};
+    for (int c = 0; c < 10; ++c)
+        for (size_t i = 0; i < n; ++i)
+            if (memcmp(&a[c][i], &b[c][i], sizeof(float)) != 0)
+                fail_msg("site %zu of %zu (%s), channel %d: %.9g on 1 thread, %.9g on 2", i, n,
+                         i < s[0].vertex_count ? "vertex" : "node", c, (double)a[c][i], (double)b[c][i]);
+    sg_hybrid_sites_free(&s[0]);
+    sg_hybrid_sites_free(&s[1]);
+    sg_hybrid_destroy(h);
+    sg_mesh_free(&m);
+}
+
+/* ---- 15: albedo ------------------------------------------------------------ */
+
+static void test_hybrid_albedo_is_site_blend(void **state)
+{
+    (void)state;
+    for (int coloured = 0; coloured < 2; ++coloured) {
+        sg_mesh m = fine_sphere();
+        if (coloured) {
+            m.colors = sg_alloc_array(m.vertex_count, 3 * sizeof(float));
+            assert_non_null(m.colors);
+            for (size_t i = 0; i < 3 * m.vertex_count; ++i)
+                m.colors[i] = 0.5f + 0.5f * m.positions[i];
+        }
+        sg_scene *sc = mesh_scene(&m, 2.0f);
+        const sg_sites *st = sg_scene_sites(sc);
+        uint64_t rng = 5;
+        size_t kinds[3] = {0}; /* misses, triangle hits, LOD hits */
+        for (int i = 0; i < 20000; ++i) {
+            sg_vec3 org = sg_v3_scale(random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
+            sg_ray r = ray_to(org, sg_v3_scale(random_dir(&rng), 1.2f * sg_test_rand01(&rng)));
+            r.spread = i % 2 ? 0.01f : 0.0f;
+            sg_hit hit;
+            if (!sg_scene_intersect(sc, &r, &hit, NULL)) {
+                ++kinds[0];
+                continue;
+            }
+            ++kinds[hit.leaf == SG_INVALID_ID ? 2 : 1];
+            uint32_t ids[3];
+            float w[3];
+            int n = sg_scene_hit_sites(sc, &hit, ids, w, 3);
+            sg_vec3 want = sg_v3(0.0f, 0.0f, 0.0f);
+            for (int k = 0; k < n; ++k)
+                want = sg_v3_madd(want, sg_v3(st->ar[ids[k]], st->ag[ids[k]], st->ab[ids[k]]), w[k]);
+            sg_vec3 got = sg_scene_hit_albedo(sc, &hit);
+            if (memcmp(&got, &want, sizeof got) != 0)
+                fail_msg("%s mesh, ray %d (%s hit, %d sites): albedo %.9g %.9g %.9g, blend of sites %.9g %.9g %.9g",
+                         coloured ? "coloured" : "plain", i, hit.leaf == SG_INVALID_ID ? "LOD" : "triangle", n,
+                         (double)got.x, (double)got.y, (double)got.z, (double)want.x, (double)want.y,
+                         (double)want.z);
+        }
+        print_message("%s: %zu misses, %zu triangle hits, %zu LOD hits\n", coloured ? "coloured" : "plain",
+                      kinds[0], kinds[1], kinds[2]);
+        assert_true(kinds[0] > 100 && kinds[1] > 1000 && kinds[2] > 100);
+        sg_scene_destroy(sc);
+        sg_mesh_free(&m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -919,6 +1022,8 @@ int main(void)
         cmocka_unit_test(test_hybrid_scene_errors),
         cmocka_unit_test(test_hybrid_filter_nodes),
         cmocka_unit_test(test_hybrid_scene_file_roundtrip),
+        cmocka_unit_test(test_hybrid_sites_threads_identical),
+        cmocka_unit_test(test_hybrid_albedo_is_site_blend),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
