@@ -36,8 +36,9 @@
  * Phong-tessellated surface; 4: issue 12's leak-free surfaces (keyed
  * splats, radii per layer) and the back-hit counts in the .txt; 5: camera
  * rays without a footprint, so the ISO and hybrid surfaces' references
- * see full detail (pathtrace.c). */
-#define SG_VERIFY_REF_VERSION 5u
+ * see full detail (pathtrace.c); 6: MLS passes crossings in the overhang
+ * of convex keyed edges (mls.c past_back_layer). */
+#define SG_VERIFY_REF_VERSION 6u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */
