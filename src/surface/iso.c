@@ -736,9 +736,45 @@ typedef struct packet_entry {
 /* The per-axis constants of four rays, lane r = rays[r]. */
 typedef struct packet_geom {
     __m128 od[3], inv[3];
+    __m128 dir[3];  /* the directions, for the slab test               */
     __m128 par[3];  /* all ones where ray r is parallel to axis a's planes */
     int any_par[3];
 } packet_geom;
+
+/* The lanes of act whose path through the cell ([t0, t1]) stays off node
+ * D's slab (normal n): slab_skips' test lane by lane, each expression in
+ * its order (no contraction: mul then add), min2/max2 as above. The
+ * decision that follows (either, outside) is slab_skips' too, per lane. */
+static inline unsigned packet_slab_skips(const packet_geom *pg, const iso_lod *D, sg_vec3 n, ray_state rs[4],
+                                         unsigned act, __m128 t0, __m128 t1)
+{
+    const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
+    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    __m128 px = _mm_mul_ps(nx, pg->od[0]), py = _mm_mul_ps(ny, pg->od[1]), pz = _mm_mul_ps(nz, pg->od[2]);
+    __m128 s0 = _mm_add_ps(_mm_add_ps(px, py), pz);
+    __m128 sd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, pg->dir[0]), _mm_mul_ps(ny, pg->dir[1])),
+                           _mm_mul_ps(nz, pg->dir[2]));
+    __m128 a = _mm_add_ps(s0, _mm_mul_ps(sd, t0)), b = _mm_add_ps(s0, _mm_mul_ps(sd, t1));
+    __m128 sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_and_ps(px, absmask), _mm_and_ps(py, absmask)),
+                                       _mm_and_ps(pz, absmask)),
+                            t1);
+    __m128 m = _mm_mul_ps(_mm_set1_ps(8.0f * FLT_EPSILON), sum);
+    __m128 above = _mm_cmpgt_ps(_mm_min_ps(b, a), _mm_add_ps(_mm_set1_ps(D->s_hi), m));
+    __m128 below = _mm_cmplt_ps(_mm_max_ps(b, a), _mm_sub_ps(_mm_set1_ps(D->s_lo), m));
+    unsigned up = (unsigned)_mm_movemask_ps(above), off = (up | (unsigned)_mm_movemask_ps(below)) & act;
+    unsigned skip = 0;
+    for (unsigned q = off; q; q &= q - 1) {
+        int r = __builtin_ctz(q);
+        if (!rs[r].either || rs[r].outside) {
+            skip |= 1u << r;
+        } else if ((up >> r & 1u) && D->leaf != ISO_NO_LOD) {
+            rs[r].outside = 1;
+            rs[r].carry = 0;
+            skip |= 1u << r;
+        }
+    }
+    return skip;
+}
 
 /* half_intervals for the four lanes at once. */
 static inline void packet_half_intervals(const packet_geom *pg, const float p[3][3], __m128 ilo[3][2], __m128 ihi[3][2])
@@ -786,16 +822,18 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     }
     packet_geom pg;
     for (int a = 0; a < 3; ++a) {
-        float od[4] = {0}, inv[4] = {0}, par[4] = {0};
+        float od[4] = {0}, inv[4] = {0}, par[4] = {0}, dir[4] = {0};
         for (int r = 0; r < 4; ++r) {
             if (!(active >> r & 1u))
                 continue;
             od[r] = g[r].od[a];
             inv[r] = g[r].inv[a];
+            dir[r] = a == 0 ? rays[r].dir.x : a == 1 ? rays[r].dir.y : rays[r].dir.z;
             par[r] = g[r].par[a] ? -1.0f : 0.0f; /* the sign bit is blendv's mask */
         }
         pg.od[a] = _mm_loadu_ps(od);
         pg.inv[a] = _mm_loadu_ps(inv);
+        pg.dir[a] = _mm_loadu_ps(dir);
         pg.par[a] = _mm_loadu_ps(par);
         pg.any_par[a] = _mm_movemask_ps(pg.par[a]) != 0;
     }
@@ -809,8 +847,9 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
         unsigned act = e->active & ~found;
         if (!act)
             continue;
-        for (unsigned m = act; m; m &= m - 1)
-            nodes[__builtin_ctz(m)]++;
+        if (stats)
+            for (unsigned m = act; m; m &= m - 1)
+                nodes[__builtin_ctz(m)]++;
         if (e->kind == CELL_POSITIVE) {
             for (unsigned m = act; m; m &= m - 1) {
                 rs[__builtin_ctz(m)].outside = 1;
@@ -835,28 +874,29 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             continue;
         }
         const iso_lod *D = &iso->nodes[e->index].lod;
-        float t0[4], t1[4];
-        _mm_storeu_ps(t0, e->t0);
-        _mm_storeu_ps(t1, e->t1);
-        sg_vec3 dn = iso_lod_normal(D);
-        for (unsigned m = act; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            if (slab_skips(D, dn, &rs[r], t0[r], t1[r]))
-                act &= ~(1u << r);
-        }
+        act &= ~packet_slab_skips(&pg, D, iso_lod_normal(D), rs, act, e->t0, e->t1);
         if (!act)
             continue;
         if (lod_any && D->leaf != ISO_NO_LOD) {
-            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
-            for (unsigned m = act; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                if (lod_takes(iso, e->index, size, lod_w[r], t0[r]) &&
-                    lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
-                    found |= 1u << r;
+            /* lod_takes lane by lane: lod_w > 0 and size * unit <= lod_w * t0 */
+            __m128 lw = _mm_loadu_ps(lod_w);
+            __m128 take = _mm_and_ps(_mm_cmpgt_ps(lw, _mm_setzero_ps()),
+                                     _mm_cmple_ps(_mm_set1_ps((float)size * iso->unit), _mm_mul_ps(lw, e->t0)));
+            unsigned takes = act & (unsigned)_mm_movemask_ps(take);
+            if (takes) {
+                sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+                float t0[4], t1[4];
+                _mm_storeu_ps(t0, e->t0);
+                _mm_storeu_ps(t1, e->t1);
+                for (unsigned m = takes; m; m &= m - 1) {
+                    int r = __builtin_ctz(m);
+                    if (lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                        found |= 1u << r;
+                }
+                act &= ~found;
+                if (!act)
+                    continue;
             }
-            act &= ~found;
-            if (!act)
-                continue;
         }
         const iso_node *N = &iso->nodes[e->index];
         uint32_t base[3] = {e->x, e->y, e->z};
@@ -882,6 +922,12 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             if (!lanes)
                 continue;
             stack_entry ce = child_entry(N, base, size, level, k);
+            /* the child's record is read when it is popped: on a large
+             * octree its load was trace4's hottest (a cache miss) */
+            if (ce.is_leaf == CELL_LEAF)
+                __builtin_prefetch(&iso->leaves[ce.index]);
+            else if (ce.is_leaf == CELL_NODE)
+                __builtin_prefetch(&iso->nodes[ce.index].lod);
             assert(sp < STACK_MAX);
             st[sp++] = (packet_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, ce.level, ce.is_leaf, (uint8_t)lanes};
         }
