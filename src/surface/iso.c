@@ -413,11 +413,19 @@ static void patch_coeffs(patch *P)
     P->k[7] = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
 }
 
-/* The first accepted crossing of patch P (box b, coefficients set) over
- * [t0, t1]. */
-static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+/* A ray's way through a patch's box over [t0, t1]: its local coordinates
+ * at t0, their change over the interval, and the cubic g(σ). */
+typedef struct patch_ray {
+    float u, w, z;    /* local coordinates at t0              */
+    float bu, bw, bz; /* their change from t0 to t1           */
+    cubic c;
+} patch_ray;
+
+/* The ray's patch_ray for patch P (box b, coefficients set) over [t0, t1];
+ * trace4 evaluates the same expressions in the same order for its lanes
+ * (packet_patch_ray). */
+static inline void patch_ray_of(const patch *P, sg_aabb b, const sg_ray *ray, float t0, float t1, patch_ray *pr)
 {
-    const sg_ray *ray = rs->ray;
     const float *v = P->v;
     float k1 = P->k[1], k2 = P->k[2], k3 = P->k[3], k4 = P->k[4], k5 = P->k[5], k6 = P->k[6], k7 = P->k[7];
     sg_vec3 h = sg_v3_sub(b.hi, b.lo);
@@ -425,14 +433,25 @@ static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, flo
     sg_vec3 e = sg_v3_madd(ray->org, ray->dir, t0);
     float u = (e.x - b.lo.x) / h.x, w = (e.y - b.lo.y) / h.y, z = (e.z - b.lo.z) / h.z;
     float bu = ray->dir.x * S / h.x, bw = ray->dir.y * S / h.y, bz = ray->dir.z * S / h.z;
-    cubic c;
-    c.a0 = v[0] + k1 * u + k2 * w + k3 * z + k4 * u * w + k5 * w * z + k6 * u * z + k7 * u * w * z;
-    c.a1 = k1 * bu + k2 * bw + k3 * bz + k4 * (u * bw + w * bu) + k5 * (w * bz + z * bw) + k6 * (u * bz + z * bu) +
-           k7 * (bu * w * z + u * bw * z + u * w * bz);
-    c.a2 = k4 * bu * bw + k5 * bw * bz + k6 * bu * bz + k7 * (bu * bw * z + bu * w * bz + u * bw * bz);
-    c.a3 = k7 * bu * bw * bz;
+    cubic *c = &pr->c;
+    c->a0 = v[0] + k1 * u + k2 * w + k3 * z + k4 * u * w + k5 * w * z + k6 * u * z + k7 * u * w * z;
+    c->a1 = k1 * bu + k2 * bw + k3 * bz + k4 * (u * bw + w * bu) + k5 * (w * bz + z * bw) + k6 * (u * bz + z * bu) +
+            k7 * (bu * w * z + u * bw * z + u * w * bz);
+    c->a2 = k4 * bu * bw + k5 * bw * bz + k6 * bu * bz + k7 * (bu * bw * z + bu * w * bz + u * bw * bz);
+    c->a3 = k7 * bu * bw * bz;
+    pr->u = u, pr->w = w, pr->z = z, pr->bu = bu, pr->bw = bw, pr->bz = bz;
+}
+
+/* The first accepted crossing of patch P (box b) over [t0, t1], the
+ * ray's way through it given (pr). */
+static int patch_solve(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, const patch_ray *pr,
+                       ray_state *rs, sg_hit *hit)
+{
+    float u = pr->u, w = pr->w, z = pr->z, bu = pr->bu, bw = pr->bw, bz = pr->bz;
+    cubic c = pr->c;
+    float S = t1 - t0;
     rs->isects++;
-    float edge = h.x;
+    float edge = b.hi.x - b.lo.x;
     /* a sign change across the face shared with the previous leaf */
     if (rs->carry && fabsf(t0 - rs->carry_t) <= CARRY_EPS * edge) {
         int was_pos = rs->carry_g > 0.0f, is_pos = c.a0 > 0.0f;
@@ -474,6 +493,15 @@ static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, flo
     rs->carry_t = t1;
     rs->carry_g = ga;
     return 0;
+}
+
+/* The first accepted crossing of patch P (box b, coefficients set) over
+ * [t0, t1]. */
+static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    patch_ray pr;
+    patch_ray_of(P, b, rs->ray, t0, t1, &pr);
+    return patch_solve(iso, P, b, t0, t1, &pr, rs, hit);
 }
 
 /* Leaf `leaf`'s patch. */
@@ -882,6 +910,44 @@ static inline void packet_half_intervals(const packet_geom *pg, const float p[3]
     }
 }
 
+/* Short names for the cubic's long sums below (no contraction). */
+static inline __m128 vmul(__m128 a, __m128 b) { return _mm_mul_ps(a, b); }
+static inline __m128 vadd(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
+
+/* patch_ray_of for the four lanes at once (lane r: ray r over
+ * [T0[r], T1[r]]), each expression in its order: one division per
+ * quantity for all lanes instead of one per lane. */
+static inline void packet_patch_ray(const patch *P, sg_aabb b, const packet_geom *pg, __m128 T0, __m128 T1,
+                                    patch_ray pr[4])
+{
+    const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    __m128 S = _mm_sub_ps(T1, T0), loc[3], rate[3];
+    for (int a = 0; a < 3; ++a) {
+        __m128 h = _mm_set1_ps(hi[a] - lo[a]);
+        __m128 e = _mm_add_ps(pg->od[a], _mm_mul_ps(pg->dir[a], T0));
+        loc[a] = _mm_div_ps(_mm_sub_ps(e, _mm_set1_ps(lo[a])), h);
+        rate[a] = _mm_div_ps(_mm_mul_ps(pg->dir[a], S), h);
+    }
+    __m128 u = loc[0], w = loc[1], z = loc[2], bu = rate[0], bw = rate[1], bz = rate[2];
+    __m128 k1 = _mm_set1_ps(P->k[1]), k2 = _mm_set1_ps(P->k[2]), k3 = _mm_set1_ps(P->k[3]), k4 = _mm_set1_ps(P->k[4]);
+    __m128 k5 = _mm_set1_ps(P->k[5]), k6 = _mm_set1_ps(P->k[6]), k7 = _mm_set1_ps(P->k[7]);
+    __m128 a0 = vadd(vadd(vadd(vadd(vadd(vadd(vadd(_mm_set1_ps(P->v[0]), vmul(k1, u)), vmul(k2, w)), vmul(k3, z)), vmul(vmul(k4, u), w)), vmul(vmul(k5, w), z)),
+                    vmul(vmul(k6, u), z)),
+                  vmul(vmul(vmul(k7, u), w), z));
+    __m128 a1 = vadd(vadd(vadd(vadd(vadd(vadd(vmul(k1, bu), vmul(k2, bw)), vmul(k3, bz)), vmul(k4, vadd(vmul(u, bw), vmul(w, bu)))), vmul(k5, vadd(vmul(w, bz), vmul(z, bw)))),
+                    vmul(k6, vadd(vmul(u, bz), vmul(z, bu)))),
+                  vmul(k7, vadd(vadd(vmul(vmul(bu, w), z), vmul(vmul(u, bw), z)), vmul(vmul(u, w), bz))));
+    __m128 a2 = vadd(vadd(vadd(vmul(vmul(k4, bu), bw), vmul(vmul(k5, bw), bz)), vmul(vmul(k6, bu), bz)),
+                  vmul(k7, vadd(vadd(vmul(vmul(bu, bw), z), vmul(vmul(bu, w), bz)), vmul(vmul(u, bw), bz))));
+    __m128 a3 = vmul(vmul(vmul(k7, bu), bw), bz);
+    float f[10][4];
+    _mm_storeu_ps(f[0], u), _mm_storeu_ps(f[1], w), _mm_storeu_ps(f[2], z);
+    _mm_storeu_ps(f[3], bu), _mm_storeu_ps(f[4], bw), _mm_storeu_ps(f[5], bz);
+    _mm_storeu_ps(f[6], a0), _mm_storeu_ps(f[7], a1), _mm_storeu_ps(f[8], a2), _mm_storeu_ps(f[9], a3);
+    for (int r = 0; r < 4; ++r)
+        pr[r] = (patch_ray){f[0][r], f[1][r], f[2][r], f[3][r], f[4][r], f[5][r], {f[6][r], f[7][r], f[8][r], f[9][r]}};
+}
+
 static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
 {
     ray_state rs[4];
@@ -947,10 +1013,12 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             _mm_storeu_ps(t1, e->t1);
             patch P; /* once for the rays meeting it */
             leaf_patch(iso, e->index, &P);
+            patch_ray pr[4];
+            packet_patch_ray(&P, box, &pg, e->t0, e->t1, pr);
             for (unsigned m = act; m; m &= m - 1) {
                 int r = __builtin_ctz(m);
                 leaves[r]++;
-                if (patch_hit(iso, &P, box, t0[r], t1[r], &rs[r], &hits[r]))
+                if (patch_solve(iso, &P, box, t0[r], t1[r], &pr[r], &rs[r], &hits[r]))
                     found |= 1u << r;
             }
             continue;
