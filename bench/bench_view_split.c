@@ -134,6 +134,7 @@ int main(int argc, char **argv)
     static const char *const name[PHASES] = {"isect", "weights", "weights_ref", "bake", "view", "display"};
     double sum[PHASES] = {0}, cpu[PHASES] = {0}, sink = 0.0, maxrel = 0.0, c0;
     size_t differ = 0;
+    uint64_t view_hash = 0xcbf29ce484222325ull; /* FNV-1a of the view frames' bits: compares builds */
     sg_ray_stats rs = {0};
     int frames = 0;
     double l0 = bench_load1();
@@ -182,6 +183,11 @@ int main(int argc, char **argv)
             if (!(rel <= maxrel))
                 maxrel = rel;
         }
+        for (size_t i = 0; i < (size_t)width * (size_t)height * 3; ++i) {
+            uint32_t bits;
+            memcpy(&bits, &iv.data[i], sizeof bits);
+            view_hash = (view_hash ^ bits) * 0x100000001b3ull;
+        }
         sg_image_free(&ib);
         sg_image_free(&iv);
         ++frames;
@@ -198,6 +204,7 @@ int main(int argc, char **argv)
            sum[BAKE] / sum[VIEW], cpu[BAKE] / cpu[VIEW]);
     printf("  view vs bake: %zu channel values differ, max relative difference %.3g (sink %g)\n", differ, maxrel,
            sink);
+    printf("  view frames' hash %016llx\n", (unsigned long long)view_hash);
     double nr = (double)rs.rays;
     printf("  per primary ray: %.1f nodes, %.2f leaves, %.2f leaf tests, %.1f splats; %.1f%% hit\n", rs.nodes / nr,
            rs.leaves / nr, rs.isects / nr, rs.splats / nr, 100.0 * rs.hits / nr);

@@ -148,6 +148,82 @@ void sg_iso_leaf_corners(const sg_iso *iso, uint32_t leaf, float f[8], sg_vec3 n
     }
 }
 
+/* The trilinear interpolation of leaf L's 8 corner normals at local
+ * coordinates uvw, normalised (iso.h: smooth across leaves, the corners
+ * shared): the reference, corner by corner. */
+static sg_vec3 leaf_normal_scalar(const sg_iso *iso, const iso_leaf *L, sg_vec3 uvw)
+{
+    sg_vec3 n = sg_v3(0, 0, 0);
+    for (int k = 0; k < 8; ++k) {
+        float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
+        n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[L->corner[k]]), w);
+    }
+    return sg_v3_normalize(n);
+}
+
+#ifdef __AVX2__
+/* leaf_normal_scalar with the 8 decodes and weights in the 8 lanes of AVX
+ * vectors: every lane evaluates oct_decode's and the weight's expressions
+ * in their order (IEEE division and square root, no contraction), and the
+ * weighted sum is then taken corner by corner in the scalar order, so
+ * the result is the reference's bit for bit (tested through
+ * sg_iso_leaf_normal_reference). */
+static sg_vec3 leaf_normal(const sg_iso *iso, const iso_leaf *L, sg_vec3 uvw)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+    uint32_t code[8];
+    for (int k = 0; k < 8; ++k)
+        code[k] = iso->cn[L->corner[k]];
+    __m256i c = _mm256_loadu_si256((const __m256i *)code);
+    __m256 q = _mm256_set1_ps(32767.0f);
+    __m256 u = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(c, 16), 16)), q);
+    __m256 v = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_srai_epi32(c, 16)), q);
+    __m256 au = _mm256_and_ps(u, absmask), av = _mm256_and_ps(v, absmask);
+    __m256 z = _mm256_sub_ps(_mm256_sub_ps(one, au), av);
+    /* z < 0: x = (1 - |v|) sign_nz(u), y = (1 - |u|) sign_nz(v), sign_nz(a) = a >= 0 ? 1 : -1 */
+    __m256 su = _mm256_blendv_ps(_mm256_set1_ps(-1.0f), one, _mm256_cmp_ps(u, zero, _CMP_GE_OQ));
+    __m256 sv = _mm256_blendv_ps(_mm256_set1_ps(-1.0f), one, _mm256_cmp_ps(v, zero, _CMP_GE_OQ));
+    __m256 fold = _mm256_cmp_ps(z, zero, _CMP_LT_OQ);
+    __m256 x = _mm256_blendv_ps(u, _mm256_mul_ps(_mm256_sub_ps(one, av), su), fold);
+    __m256 y = _mm256_blendv_ps(v, _mm256_mul_ps(_mm256_sub_ps(one, au), sv), fold);
+    /* sg_v3_normalize: l2 > 1e-30 ? a * (1 / sqrt(l2)) : 0 */
+    __m256 l2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y)), _mm256_mul_ps(z, z));
+    __m256 inv = _mm256_div_ps(one, _mm256_sqrt_ps(l2));
+    __m256 ok = _mm256_cmp_ps(l2, _mm256_set1_ps(1e-30f), _CMP_GT_OQ);
+    x = _mm256_and_ps(_mm256_mul_ps(x, inv), ok);
+    y = _mm256_and_ps(_mm256_mul_ps(y, inv), ok);
+    z = _mm256_and_ps(_mm256_mul_ps(z, inv), ok);
+    /* weights: lane k takes u or 1 - u by bit 0, w by bit 1, z by bit 2 */
+    __m256 wu = _mm256_blend_ps(_mm256_set1_ps(1.0f - uvw.x), _mm256_set1_ps(uvw.x), 0xAA);
+    __m256 wv = _mm256_blend_ps(_mm256_set1_ps(1.0f - uvw.y), _mm256_set1_ps(uvw.y), 0xCC);
+    __m256 wz = _mm256_blend_ps(_mm256_set1_ps(1.0f - uvw.z), _mm256_set1_ps(uvw.z), 0xF0);
+    __m256 w = _mm256_mul_ps(_mm256_mul_ps(wu, wv), wz);
+    float px[8], py[8], pz[8];
+    _mm256_storeu_ps(px, _mm256_mul_ps(x, w));
+    _mm256_storeu_ps(py, _mm256_mul_ps(y, w));
+    _mm256_storeu_ps(pz, _mm256_mul_ps(z, w));
+    sg_vec3 n = sg_v3(0, 0, 0);
+    for (int k = 0; k < 8; ++k)
+        n = sg_v3(n.x + px[k], n.y + py[k], n.z + pz[k]);
+    return sg_v3_normalize(n);
+}
+#else
+static sg_vec3 leaf_normal(const sg_iso *iso, const iso_leaf *L, sg_vec3 uvw) { return leaf_normal_scalar(iso, L, uvw); }
+#endif
+
+sg_vec3 sg_iso_leaf_normal(const sg_iso *iso, uint32_t leaf, sg_vec3 uvw)
+{
+    assert(iso && leaf < iso->leaf_count);
+    return leaf_normal(iso, &iso->leaves[leaf], uvw);
+}
+
+sg_vec3 sg_iso_leaf_normal_reference(const sg_iso *iso, uint32_t leaf, sg_vec3 uvw)
+{
+    assert(iso && leaf < iso->leaf_count);
+    return leaf_normal_scalar(iso, &iso->leaves[leaf], uvw);
+}
+
 static inline int popcount8(unsigned v) { return __builtin_popcount(v & 0xFFu); }
 
 static inline sg_aabb cell_box(const sg_iso *iso, uint32_t x, uint32_t y, uint32_t z, uint32_t size)
@@ -309,14 +385,8 @@ static int accept(const sg_iso *iso, const patch *P, ray_state *rs, float t, sg_
     if (!(t >= ray->tmin && t <= ray->tmax))
         return 0;
     sg_vec3 n = P->n;
-    if (P->L) { /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
-        n = sg_v3(0, 0, 0);
-        for (int k = 0; k < 8; ++k) {
-            float w = (k & 1 ? uvw.x : 1.0f - uvw.x) * (k & 2 ? uvw.y : 1.0f - uvw.y) * (k & 4 ? uvw.z : 1.0f - uvw.z);
-            n = sg_v3_madd(n, sg_iso_decode_normal(iso->cn[P->L->corner[k]]), w);
-        }
-        n = sg_v3_normalize(n);
-    }
+    if (P->L) /* trilinear normal (iso.h: smooth across leaves, the corners shared) */
+        n = leaf_normal(iso, P->L, uvw);
     float side = entry ? -1.0f : 1.0f;
     float dn = sg_v3_dot(ray->dir, n);
     if (!(dn * side > SIDE_COS)) /* invariant 2 */
@@ -343,11 +413,19 @@ static void patch_coeffs(patch *P)
     P->k[7] = v[7] - v[3] - v[5] - v[6] + v[1] + v[2] + v[4] - v[0];
 }
 
-/* The first accepted crossing of patch P (box b, coefficients set) over
- * [t0, t1]. */
-static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+/* A ray's way through a patch's box over [t0, t1]: its local coordinates
+ * at t0, their change over the interval, and the cubic g(σ). */
+typedef struct patch_ray {
+    float u, w, z;    /* local coordinates at t0              */
+    float bu, bw, bz; /* their change from t0 to t1           */
+    cubic c;
+} patch_ray;
+
+/* The ray's patch_ray for patch P (box b, coefficients set) over [t0, t1];
+ * trace4 evaluates the same expressions in the same order for its lanes
+ * (packet_patch_ray). */
+static inline void patch_ray_of(const patch *P, sg_aabb b, const sg_ray *ray, float t0, float t1, patch_ray *pr)
 {
-    const sg_ray *ray = rs->ray;
     const float *v = P->v;
     float k1 = P->k[1], k2 = P->k[2], k3 = P->k[3], k4 = P->k[4], k5 = P->k[5], k6 = P->k[6], k7 = P->k[7];
     sg_vec3 h = sg_v3_sub(b.hi, b.lo);
@@ -355,14 +433,25 @@ static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, flo
     sg_vec3 e = sg_v3_madd(ray->org, ray->dir, t0);
     float u = (e.x - b.lo.x) / h.x, w = (e.y - b.lo.y) / h.y, z = (e.z - b.lo.z) / h.z;
     float bu = ray->dir.x * S / h.x, bw = ray->dir.y * S / h.y, bz = ray->dir.z * S / h.z;
-    cubic c;
-    c.a0 = v[0] + k1 * u + k2 * w + k3 * z + k4 * u * w + k5 * w * z + k6 * u * z + k7 * u * w * z;
-    c.a1 = k1 * bu + k2 * bw + k3 * bz + k4 * (u * bw + w * bu) + k5 * (w * bz + z * bw) + k6 * (u * bz + z * bu) +
-           k7 * (bu * w * z + u * bw * z + u * w * bz);
-    c.a2 = k4 * bu * bw + k5 * bw * bz + k6 * bu * bz + k7 * (bu * bw * z + bu * w * bz + u * bw * bz);
-    c.a3 = k7 * bu * bw * bz;
+    cubic *c = &pr->c;
+    c->a0 = v[0] + k1 * u + k2 * w + k3 * z + k4 * u * w + k5 * w * z + k6 * u * z + k7 * u * w * z;
+    c->a1 = k1 * bu + k2 * bw + k3 * bz + k4 * (u * bw + w * bu) + k5 * (w * bz + z * bw) + k6 * (u * bz + z * bu) +
+            k7 * (bu * w * z + u * bw * z + u * w * bz);
+    c->a2 = k4 * bu * bw + k5 * bw * bz + k6 * bu * bz + k7 * (bu * bw * z + bu * w * bz + u * bw * bz);
+    c->a3 = k7 * bu * bw * bz;
+    pr->u = u, pr->w = w, pr->z = z, pr->bu = bu, pr->bw = bw, pr->bz = bz;
+}
+
+/* The first accepted crossing of patch P (box b) over [t0, t1], the
+ * ray's way through it given (pr). */
+static int patch_solve(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, const patch_ray *pr,
+                       ray_state *rs, sg_hit *hit)
+{
+    float u = pr->u, w = pr->w, z = pr->z, bu = pr->bu, bw = pr->bw, bz = pr->bz;
+    cubic c = pr->c;
+    float S = t1 - t0;
     rs->isects++;
-    float edge = h.x;
+    float edge = b.hi.x - b.lo.x;
     /* a sign change across the face shared with the previous leaf */
     if (rs->carry && fabsf(t0 - rs->carry_t) <= CARRY_EPS * edge) {
         int was_pos = rs->carry_g > 0.0f, is_pos = c.a0 > 0.0f;
@@ -404,6 +493,15 @@ static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, flo
     rs->carry_t = t1;
     rs->carry_g = ga;
     return 0;
+}
+
+/* The first accepted crossing of patch P (box b, coefficients set) over
+ * [t0, t1]. */
+static int patch_hit(const sg_iso *iso, const patch *P, sg_aabb b, float t0, float t1, ray_state *rs, sg_hit *hit)
+{
+    patch_ray pr;
+    patch_ray_of(P, b, rs->ray, t0, t1, &pr);
+    return patch_solve(iso, P, b, t0, t1, &pr, rs, hit);
 }
 
 /* Leaf `leaf`'s patch. */
@@ -626,6 +724,17 @@ static inline stack_entry child_entry(const iso_node *N, const uint32_t base[3],
     return ce;
 }
 
+/* Asks for the record of a cell about to be pushed: it is read when the
+ * cell is popped, and on a large octree that load was the traversal's
+ * hottest instruction (a cache miss; perf, 1M-point dragon). */
+static inline void prefetch_cell(const sg_iso *iso, const stack_entry *ce)
+{
+    if (ce->is_leaf == CELL_LEAF)
+        __builtin_prefetch(&iso->leaves[ce->index]);
+    else if (ce->is_leaf == CELL_NODE)
+        __builtin_prefetch(&iso->nodes[ce->index].lod);
+}
+
 static void ray_state_init(ray_state *rs, const sg_ray *ray)
 {
     *rs = (ray_state){.ray = ray};
@@ -702,6 +811,7 @@ static int trace(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats
         for (unsigned m = xor_permute(visit, g.octant); m; m &= ~(1u << (31 - __builtin_clz(m)))) {
             unsigned k = (31u - (unsigned)__builtin_clz(m)) ^ g.octant;
             stack_entry ce = child_entry(N, base, size, e.level, k);
+            prefetch_cell(iso, &ce);
             ce.t0 = c0s[k];
             ce.t1 = c1s[k];
             assert(sp < STACK_MAX);
@@ -736,9 +846,45 @@ typedef struct packet_entry {
 /* The per-axis constants of four rays, lane r = rays[r]. */
 typedef struct packet_geom {
     __m128 od[3], inv[3];
+    __m128 dir[3];  /* the directions, for the slab test               */
     __m128 par[3];  /* all ones where ray r is parallel to axis a's planes */
     int any_par[3];
 } packet_geom;
+
+/* The lanes of act whose path through the cell ([t0, t1]) stays off node
+ * D's slab (normal n): slab_skips' test lane by lane, each expression in
+ * its order (no contraction: mul then add), min2/max2 as above. The
+ * decision that follows (either, outside) is slab_skips' too, per lane. */
+static inline unsigned packet_slab_skips(const packet_geom *pg, const iso_lod *D, sg_vec3 n, ray_state rs[4],
+                                         unsigned act, __m128 t0, __m128 t1)
+{
+    const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
+    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    __m128 px = _mm_mul_ps(nx, pg->od[0]), py = _mm_mul_ps(ny, pg->od[1]), pz = _mm_mul_ps(nz, pg->od[2]);
+    __m128 s0 = _mm_add_ps(_mm_add_ps(px, py), pz);
+    __m128 sd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, pg->dir[0]), _mm_mul_ps(ny, pg->dir[1])),
+                           _mm_mul_ps(nz, pg->dir[2]));
+    __m128 a = _mm_add_ps(s0, _mm_mul_ps(sd, t0)), b = _mm_add_ps(s0, _mm_mul_ps(sd, t1));
+    __m128 sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_and_ps(px, absmask), _mm_and_ps(py, absmask)),
+                                       _mm_and_ps(pz, absmask)),
+                            t1);
+    __m128 m = _mm_mul_ps(_mm_set1_ps(8.0f * FLT_EPSILON), sum);
+    __m128 above = _mm_cmpgt_ps(_mm_min_ps(b, a), _mm_add_ps(_mm_set1_ps(D->s_hi), m));
+    __m128 below = _mm_cmplt_ps(_mm_max_ps(b, a), _mm_sub_ps(_mm_set1_ps(D->s_lo), m));
+    unsigned up = (unsigned)_mm_movemask_ps(above), off = (up | (unsigned)_mm_movemask_ps(below)) & act;
+    unsigned skip = 0;
+    for (unsigned q = off; q; q &= q - 1) {
+        int r = __builtin_ctz(q);
+        if (!rs[r].either || rs[r].outside) {
+            skip |= 1u << r;
+        } else if ((up >> r & 1u) && D->leaf != ISO_NO_LOD) {
+            rs[r].outside = 1;
+            rs[r].carry = 0;
+            skip |= 1u << r;
+        }
+    }
+    return skip;
+}
 
 /* half_intervals for the four lanes at once. */
 static inline void packet_half_intervals(const packet_geom *pg, const float p[3][3], __m128 ilo[3][2], __m128 ihi[3][2])
@@ -764,6 +910,44 @@ static inline void packet_half_intervals(const packet_geom *pg, const float p[3]
     }
 }
 
+/* Short names for the cubic's long sums below (no contraction). */
+static inline __m128 vmul(__m128 a, __m128 b) { return _mm_mul_ps(a, b); }
+static inline __m128 vadd(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
+
+/* patch_ray_of for the four lanes at once (lane r: ray r over
+ * [T0[r], T1[r]]), each expression in its order: one division per
+ * quantity for all lanes instead of one per lane. */
+static inline void packet_patch_ray(const patch *P, sg_aabb b, const packet_geom *pg, __m128 T0, __m128 T1,
+                                    patch_ray pr[4])
+{
+    const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    __m128 S = _mm_sub_ps(T1, T0), loc[3], rate[3];
+    for (int a = 0; a < 3; ++a) {
+        __m128 h = _mm_set1_ps(hi[a] - lo[a]);
+        __m128 e = _mm_add_ps(pg->od[a], _mm_mul_ps(pg->dir[a], T0));
+        loc[a] = _mm_div_ps(_mm_sub_ps(e, _mm_set1_ps(lo[a])), h);
+        rate[a] = _mm_div_ps(_mm_mul_ps(pg->dir[a], S), h);
+    }
+    __m128 u = loc[0], w = loc[1], z = loc[2], bu = rate[0], bw = rate[1], bz = rate[2];
+    __m128 k1 = _mm_set1_ps(P->k[1]), k2 = _mm_set1_ps(P->k[2]), k3 = _mm_set1_ps(P->k[3]), k4 = _mm_set1_ps(P->k[4]);
+    __m128 k5 = _mm_set1_ps(P->k[5]), k6 = _mm_set1_ps(P->k[6]), k7 = _mm_set1_ps(P->k[7]);
+    __m128 a0 = vadd(vadd(vadd(vadd(vadd(vadd(vadd(_mm_set1_ps(P->v[0]), vmul(k1, u)), vmul(k2, w)), vmul(k3, z)), vmul(vmul(k4, u), w)), vmul(vmul(k5, w), z)),
+                    vmul(vmul(k6, u), z)),
+                  vmul(vmul(vmul(k7, u), w), z));
+    __m128 a1 = vadd(vadd(vadd(vadd(vadd(vadd(vmul(k1, bu), vmul(k2, bw)), vmul(k3, bz)), vmul(k4, vadd(vmul(u, bw), vmul(w, bu)))), vmul(k5, vadd(vmul(w, bz), vmul(z, bw)))),
+                    vmul(k6, vadd(vmul(u, bz), vmul(z, bu)))),
+                  vmul(k7, vadd(vadd(vmul(vmul(bu, w), z), vmul(vmul(u, bw), z)), vmul(vmul(u, w), bz))));
+    __m128 a2 = vadd(vadd(vadd(vmul(vmul(k4, bu), bw), vmul(vmul(k5, bw), bz)), vmul(vmul(k6, bu), bz)),
+                  vmul(k7, vadd(vadd(vmul(vmul(bu, bw), z), vmul(vmul(bu, w), bz)), vmul(vmul(u, bw), bz))));
+    __m128 a3 = vmul(vmul(vmul(k7, bu), bw), bz);
+    float f[10][4];
+    _mm_storeu_ps(f[0], u), _mm_storeu_ps(f[1], w), _mm_storeu_ps(f[2], z);
+    _mm_storeu_ps(f[3], bu), _mm_storeu_ps(f[4], bw), _mm_storeu_ps(f[5], bz);
+    _mm_storeu_ps(f[6], a0), _mm_storeu_ps(f[7], a1), _mm_storeu_ps(f[8], a2), _mm_storeu_ps(f[9], a3);
+    for (int r = 0; r < 4; ++r)
+        pr[r] = (patch_ray){f[0][r], f[1][r], f[2][r], f[3][r], f[4][r], f[5][r], {f[6][r], f[7][r], f[8][r], f[9][r]}};
+}
+
 static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
 {
     ray_state rs[4];
@@ -786,16 +970,18 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     }
     packet_geom pg;
     for (int a = 0; a < 3; ++a) {
-        float od[4] = {0}, inv[4] = {0}, par[4] = {0};
+        float od[4] = {0}, inv[4] = {0}, par[4] = {0}, dir[4] = {0};
         for (int r = 0; r < 4; ++r) {
             if (!(active >> r & 1u))
                 continue;
             od[r] = g[r].od[a];
             inv[r] = g[r].inv[a];
+            dir[r] = a == 0 ? rays[r].dir.x : a == 1 ? rays[r].dir.y : rays[r].dir.z;
             par[r] = g[r].par[a] ? -1.0f : 0.0f; /* the sign bit is blendv's mask */
         }
         pg.od[a] = _mm_loadu_ps(od);
         pg.inv[a] = _mm_loadu_ps(inv);
+        pg.dir[a] = _mm_loadu_ps(dir);
         pg.par[a] = _mm_loadu_ps(par);
         pg.any_par[a] = _mm_movemask_ps(pg.par[a]) != 0;
     }
@@ -809,8 +995,9 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
         unsigned act = e->active & ~found;
         if (!act)
             continue;
-        for (unsigned m = act; m; m &= m - 1)
-            nodes[__builtin_ctz(m)]++;
+        if (stats)
+            for (unsigned m = act; m; m &= m - 1)
+                nodes[__builtin_ctz(m)]++;
         if (e->kind == CELL_POSITIVE) {
             for (unsigned m = act; m; m &= m - 1) {
                 rs[__builtin_ctz(m)].outside = 1;
@@ -826,37 +1013,40 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             _mm_storeu_ps(t1, e->t1);
             patch P; /* once for the rays meeting it */
             leaf_patch(iso, e->index, &P);
+            patch_ray pr[4];
+            packet_patch_ray(&P, box, &pg, e->t0, e->t1, pr);
             for (unsigned m = act; m; m &= m - 1) {
                 int r = __builtin_ctz(m);
                 leaves[r]++;
-                if (patch_hit(iso, &P, box, t0[r], t1[r], &rs[r], &hits[r]))
+                if (patch_solve(iso, &P, box, t0[r], t1[r], &pr[r], &rs[r], &hits[r]))
                     found |= 1u << r;
             }
             continue;
         }
         const iso_lod *D = &iso->nodes[e->index].lod;
-        float t0[4], t1[4];
-        _mm_storeu_ps(t0, e->t0);
-        _mm_storeu_ps(t1, e->t1);
-        sg_vec3 dn = iso_lod_normal(D);
-        for (unsigned m = act; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            if (slab_skips(D, dn, &rs[r], t0[r], t1[r]))
-                act &= ~(1u << r);
-        }
+        act &= ~packet_slab_skips(&pg, D, iso_lod_normal(D), rs, act, e->t0, e->t1);
         if (!act)
             continue;
         if (lod_any && D->leaf != ISO_NO_LOD) {
-            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
-            for (unsigned m = act; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                if (lod_takes(iso, e->index, size, lod_w[r], t0[r]) &&
-                    lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
-                    found |= 1u << r;
+            /* lod_takes lane by lane: lod_w > 0 and size * unit <= lod_w * t0 */
+            __m128 lw = _mm_loadu_ps(lod_w);
+            __m128 take = _mm_and_ps(_mm_cmpgt_ps(lw, _mm_setzero_ps()),
+                                     _mm_cmple_ps(_mm_set1_ps((float)size * iso->unit), _mm_mul_ps(lw, e->t0)));
+            unsigned takes = act & (unsigned)_mm_movemask_ps(take);
+            if (takes) {
+                sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+                float t0[4], t1[4];
+                _mm_storeu_ps(t0, e->t0);
+                _mm_storeu_ps(t1, e->t1);
+                for (unsigned m = takes; m; m &= m - 1) {
+                    int r = __builtin_ctz(m);
+                    if (lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                        found |= 1u << r;
+                }
+                act &= ~found;
+                if (!act)
+                    continue;
             }
-            act &= ~found;
-            if (!act)
-                continue;
         }
         const iso_node *N = &iso->nodes[e->index];
         uint32_t base[3] = {e->x, e->y, e->z};
@@ -882,6 +1072,7 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
             if (!lanes)
                 continue;
             stack_entry ce = child_entry(N, base, size, level, k);
+            prefetch_cell(iso, &ce);
             assert(sp < STACK_MAX);
             st[sp++] = (packet_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, ce.level, ce.is_leaf, (uint8_t)lanes};
         }

@@ -219,6 +219,16 @@ void sg_iso_leaf_boxes(const sg_iso *iso, sg_aabb *boxes);
  * (bit 0: +x, bit 1: +y, bit 2: +z) of its box. */
 void sg_iso_leaf_corners(const sg_iso *iso, uint32_t leaf, float f[8], sg_vec3 n[8]);
 
+/* The shading normal of leaf `leaf` at local coordinates uvw ([0,1]^3 of
+ * its box, corner c at bit 0: +x, 1: +y, 2: +z) as a hit there gets it
+ * before it is turned to its crossing's side: the trilinear interpolation
+ * of the decoded corner normals, normalised. sg_iso_leaf_normal is the
+ * kernel the traversal uses (8 corners in AVX lanes where built with
+ * AVX2), _reference the scalar one, corner by corner; they agree bit for
+ * bit (exposed for that test). */
+sg_vec3 sg_iso_leaf_normal(const sg_iso *iso, uint32_t leaf, sg_vec3 uvw);
+sg_vec3 sg_iso_leaf_normal_reference(const sg_iso *iso, uint32_t leaf, sg_vec3 uvw);
+
 /* FNV-1a over the stored arrays and scalars: equal for equal ISOs. */
 uint64_t sg_iso_checksum(const sg_iso *iso);
 

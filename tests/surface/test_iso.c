@@ -647,6 +647,83 @@ static void test_iso_intersect4_matches_single_lod(void **state)
     intersect4_matches_single(8.0f);
 }
 
+/* Four rays at once against one at a time on the bunny's ISO (30k
+ * points, concave folds, thin ears) from 400 random cameras, outside and
+ * inside its box, with and without level of detail: quads of neighbouring
+ * pixels and quads whose rays lie up to 16 pixels apart (their lanes
+ * leave the shared traversal at different cells), rays that miss and
+ * graze the silhouette, every face flag. Each ray must get its hit alone,
+ * bit for bit, and the normal kernel the traversal uses
+ * (sg_iso_leaf_normal) must equal its scalar reference at each hit. */
+static void test_iso_intersect4_matches_single_bunny(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"bunny\",\"points\":30000}]}");
+    sg_iso *iso = build_iso(sg_scene_points(sg_world_scene(w, 0)), 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
+    float R = 0.5f * sg_v3_length(sg_v3_sub(info.bounds.hi, info.bounds.lo));
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const int n = 64;
+    uint64_t rng = 11;
+    int checked = 0, hits = 0, diverged = 0;
+    for (int cam = 0; cam < 400; ++cam) {
+        float lod_px = cam % 2 ? 1.0f : 0.0f;
+        sg_iso_set_lod(iso, lod_px);
+        sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
+        sg_vec3 look = sg_v3_add(c, sg_v3_scale(random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
+        uint32_t fl = flags[cam % 3];
+        int step = cam % 4 == 3 ? 1 + (int)(16.0f * sg_test_rand01(&rng)) : 1;
+        for (int q = 0; q < 16; ++q) {
+            int x = (int)((float)(n - step) * sg_test_rand01(&rng)), y = (int)((float)(n - step) * sg_test_rand01(&rng));
+            sg_ray rays[4];
+            for (int r = 0; r < 4; ++r) {
+                rays[r] = camera_ray(eye, look, n, x + (r & 1) * step, y + (r >> 1) * step);
+                rays[r].flags = fl;
+                rays[r].spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)n;
+            }
+            unsigned mask = q % 5 == 4 ? 0xDu : 0xFu;
+            sg_hit four[4], one;
+            unsigned got = sg_iso_intersect4(iso, rays, mask, four, NULL);
+            unsigned alone = 0;
+            for (int r = 0; r < 4; ++r) {
+                if (!(mask >> r & 1u))
+                    continue;
+                int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
+                alone |= (unsigned)h << r;
+                ++checked;
+                hits += h;
+                if (h != (int)(got >> r & 1u))
+                    fail_msg("camera %d (eye %g %g %g) pixel (%d, %d) step %d ray %d: alone %d, in four %u", cam,
+                             (double)eye.x, (double)eye.y, (double)eye.z, x, y, step, r, h, got >> r & 1u);
+                if (h && (memcmp(&one.t, &four[r].t, sizeof one.t) || memcmp(&one.p, &four[r].p, sizeof one.p) ||
+                          memcmp(&one.n, &four[r].n, sizeof one.n) || one.splat != four[r].splat ||
+                          one.leaf != four[r].leaf))
+                    fail_msg("camera %d pixel (%d, %d) step %d ray %d: hits differ (t %.9g vs %.9g, n %.9g %.9g "
+                             "%.9g vs %.9g %.9g %.9g)",
+                             cam, x, y, step, r, (double)one.t, (double)four[r].t, (double)one.n.x, (double)one.n.y,
+                             (double)one.n.z, (double)four[r].n.x, (double)four[r].n.y, (double)four[r].n.z);
+                if (h) {
+                    sg_vec3 uvw = sg_v3(sg_test_rand01(&rng), sg_test_rand01(&rng), sg_test_rand01(&rng));
+                    if (q % 4 == 0) /* the box's faces and corners */
+                        uvw = sg_v3((float)(q & 1), (float)(q >> 1 & 1), 0.0f);
+                    sg_vec3 a = sg_iso_leaf_normal(iso, one.leaf, uvw), b = sg_iso_leaf_normal_reference(iso, one.leaf, uvw);
+                    if (memcmp(&a, &b, sizeof a))
+                        fail_msg("leaf %u at (%.9g %.9g %.9g): normal %.9g %.9g %.9g, reference %.9g %.9g %.9g", one.leaf,
+                                 (double)uvw.x, (double)uvw.y, (double)uvw.z, (double)a.x, (double)a.y, (double)a.z,
+                                 (double)b.x, (double)b.y, (double)b.z);
+                }
+            }
+            diverged += alone != 0 && alone != mask;
+        }
+    }
+    printf("intersect4 on the bunny: %d rays checked, %d hits, %d quads partly hit\n", checked, hits, diverged);
+    assert_true(hits > checked / 5 && hits < checked * 9 / 10 && diverged > 100);
+    sg_iso_destroy(iso);
+    sg_world_destroy(w);
+}
+
 /* 8b. Level of detail (iso.h) against full detail on a sampled sphere seen
  * small (radius 1 at distance 6: about 62 of 128 pixels across), so that
  * cells below a few footprints hold much of the surface.
@@ -825,6 +902,7 @@ int main(void)
         cmocka_unit_test(test_iso_agrees_with_mls_bunny),
         cmocka_unit_test(test_iso_intersect4_matches_single),
         cmocka_unit_test(test_iso_intersect4_matches_single_lod),
+        cmocka_unit_test(test_iso_intersect4_matches_single_bunny),
         cmocka_unit_test(test_iso_lod_against_full_detail),
         cmocka_unit_test(test_iso_sphere_no_holes),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
