@@ -209,13 +209,21 @@ static void test_disk_no_holes(void **state) { (void)state; check_no_holes(SG_SU
  * corners within one splat radius r, the disks overhang them by at most r;
  * both stay closed (every ray aimed at the cube hits) and face centres get
  * the face normal. */
+/* The sharp-edged cube of 80 x 80 splats a face, radius r = 2 h, as a
+ * scene of the given model. */
+static sg_scene *cube_scene(sg_pointset *ps, sg_surface_model model, float *r)
+{
+    float h;
+    make_cube(ps, 80, &h);
+    *r = 2.0f * h;
+    return build(ps, model, SG_KERNEL_HAT, 0);
+}
+
 static void check_cube(sg_surface_model model)
 {
     sg_pointset ps = {0};
-    float h;
-    make_cube(&ps, 80, &h);
-    float r = 2.0f * h;
-    sg_scene *s = build(&ps, model, SG_KERNEL_HAT, 0);
+    float r;
+    sg_scene *s = cube_scene(&ps, model, &r);
     uint64_t rng = 7;
     int misses = 0;
     float worst = 0;
@@ -268,10 +276,8 @@ static void test_mls_convex_edge_no_overhang(void **state)
 {
     (void)state;
     sg_pointset ps = {0};
-    float h;
-    make_cube(&ps, 80, &h);
-    float r = 2.0f * h;
-    sg_scene *s = build(&ps, SG_SURFACE_MLS, SG_KERNEL_HAT, 0);
+    float r;
+    sg_scene *s = cube_scene(&ps, SG_SURFACE_MLS, &r);
     uint64_t rng = 11;
     int over = 0, under = 0, rays = 0;
     for (int i = 0; i < 400; ++i) {
