@@ -514,6 +514,20 @@ static void leaf_patch(const sg_iso *iso, uint32_t leaf, patch *P)
     patch_coeffs(P);
 }
 
+/* slab_skips' decision for a ray whose path stays off the slab (above:
+ * on the side its normal faces), shared with packet_slab_skips. */
+static inline int slab_off_skips(const iso_lod *D, ray_state *rs, int above)
+{
+    if (!rs->either || rs->outside)
+        return 1;
+    if (above && D->leaf != ISO_NO_LOD) {
+        rs->outside = 1;
+        rs->carry = 0;
+        return 1;
+    }
+    return 0;
+}
+
 /* Whether ray state rs may skip node `node` (cell interval [t0, t1],
  * normal n decoded from D) without meeting any leaf of it: its path
  * through the cell stays off the slab holding every leaf below
@@ -532,14 +546,7 @@ static inline int slab_skips(const iso_lod *D, sg_vec3 n, ray_state *rs, float t
     int above = min2(a, b) > D->s_hi + m, below = max2(a, b) < D->s_lo - m;
     if (!above && !below)
         return 0;
-    if (!rs->either || rs->outside)
-        return 1;
-    if (above && D->leaf != ISO_NO_LOD) {
-        rs->outside = 1;
-        rs->carry = 0;
-        return 1;
-    }
-    return 0;
+    return slab_off_skips(D, rs, above);
 }
 
 /* Whether a ray whose footprint is lod_w wide per unit distance takes the
@@ -854,7 +861,7 @@ typedef struct packet_geom {
 /* The lanes of act whose path through the cell ([t0, t1]) stays off node
  * D's slab (normal n): slab_skips' test lane by lane, each expression in
  * its order (no contraction: mul then add), min2/max2 as above. The
- * decision that follows (either, outside) is slab_skips' too, per lane. */
+ * decision that follows is slab_off_skips, per lane. */
 static inline unsigned packet_slab_skips(const packet_geom *pg, const iso_lod *D, sg_vec3 n, ray_state rs[4],
                                          unsigned act, __m128 t0, __m128 t1)
 {
@@ -875,13 +882,8 @@ static inline unsigned packet_slab_skips(const packet_geom *pg, const iso_lod *D
     unsigned skip = 0;
     for (unsigned q = off; q; q &= q - 1) {
         int r = __builtin_ctz(q);
-        if (!rs[r].either || rs[r].outside) {
+        if (slab_off_skips(D, &rs[r], (int)(up >> r & 1u)))
             skip |= 1u << r;
-        } else if ((up >> r & 1u) && D->leaf != ISO_NO_LOD) {
-            rs[r].outside = 1;
-            rs[r].carry = 0;
-            skip |= 1u << r;
-        }
     }
     return skip;
 }
