@@ -79,6 +79,8 @@ static const char usage[] =
     "  --threads N       OpenMP threads for builds and frames (default: all)\n"
     "  --leaf-max N      triangles per leaf, 1..8 (default 8)\n"
     "  --no-heap         skip the heap traversal rows\n"
+    "  --embree-packets  also time Embree's packet traversal (rtcIntersect16/8 on\n"
+    "                    4x4 / 4x2 pixel blocks) beside each full-detail row\n"
     "  --quick           smoke test: dragon_vrip_res3 (45k triangles), split 2, 2 frames\n"
     "  --csv PATH        write the rows as CSV\n"
     "  --md PATH         write the tables as markdown\n"
@@ -91,7 +93,7 @@ typedef struct options {
     float lods[MAX_LODS];
     int lod_count;
     int views[2];
-    int frames, threads, leaf_max, heap, quick;
+    int frames, threads, leaf_max, heap, quick, embree_packets;
     const char *csv, *md, *png_dir;
 } options;
 
@@ -105,6 +107,9 @@ typedef struct row {
     double fps, mrays, cpu_ms;
     double embree_fps, ratio;
     double embree_cpu_ms, cpu_ratio; /* CPU time per frame: Embree's / ours */
+    double packet_fps, packet_cpu_ms; /* Embree packets (--embree-packets); 0: not run */
+    int packet_width;                 /* rays per Embree packet: 16 or 8 */
+    double packet_agree;              /* share of pixels equal to the single-ray frame's */
     double pops, spheres, tris, lod_hit, hit;
     double rel_mse;       /* vs the hybrid full-detail frame; -1: n/a */
     double agree, same_tri; /* vs Embree (full detail); -1: n/a */
@@ -159,6 +164,9 @@ static int parse_options(int argc, char **argv, options *o)
             o->mesh = QUICK_MESH;
             o->split = 2;
             o->frames = 2;
+            continue;
+        } else if (strcmp(a, "--embree-packets") == 0) {
+            o->embree_packets = 1;
             continue;
         } else if (strcmp(a, "--no-heap") == 0) {
             o->heap = 0;
@@ -438,7 +446,9 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
     sg_footprint fp = sg_footprint_pinhole(cam->tan_half_fov, IMAGE_SIZE, lod);
     const sg_footprint *fpp = lod >= 0.0f ? &fp : NULL;
     frame_stats best = {0};
-    embree_tris_stats ebest = {0};
+    embree_tris_stats ebest = {0}, pbest = {0};
+    int pwidth = 0;
+    double packet_agree = -1.0;
     sg_image img = {0};
     for (int f = 0; f <= o->frames; f++) {
         frame_stats fs;
@@ -452,13 +462,32 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
         embree_tris_stats es;
         st = embree_tris_frame(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &eimg, f == 0 ? ids_b : NULL, NULL,
                                &es, err);
-        sg_image_free(&eimg);
         if (st != SG_OK) {
             sg_image_free(&img);
             return st;
         }
         if (f > 0 && (ebest.seconds == 0.0 || es.seconds < ebest.seconds))
             ebest = es;
+        if (o->embree_packets && lod < 0.0f) {
+            sg_image pimg = {0};
+            st = embree_tris_frame_packets(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &pimg, &pwidth, &es,
+                                           err);
+            if (st != SG_OK) {
+                sg_image_free(&eimg);
+                sg_image_free(&img);
+                return st;
+            }
+            if (f == 0) { /* the packets' image against rtcIntersect1's: pixels within 1e-4 */
+                size_t same = 0, n = (size_t)IMAGE_SIZE * IMAGE_SIZE;
+                for (size_t i = 0; i < 3 * n; i += 3)
+                    same += fabsf(pimg.data[i] - eimg.data[i]) <= 1e-4f;
+                packet_agree = (double)same / (double)n;
+            }
+            sg_image_free(&pimg);
+            if (f > 0 && (pbest.seconds == 0.0 || es.seconds < pbest.seconds))
+                pbest = es;
+        }
+        sg_image_free(&eimg);
     }
     row *r = &rows[nrows++];
     memset(r, 0, sizeof *r);
@@ -480,6 +509,12 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
     r->ratio = r->fps / r->embree_fps;
     r->embree_cpu_ms = ebest.cpu_seconds * 1e3;
     r->cpu_ratio = r->embree_cpu_ms / r->cpu_ms;
+    if (pbest.seconds > 0.0) {
+        r->packet_fps = 1.0 / pbest.seconds;
+        r->packet_cpu_ms = pbest.cpu_seconds * 1e3;
+        r->packet_width = pwidth;
+        r->packet_agree = packet_agree;
+    }
     r->pops = (double)best.st.pops / rays;
     r->spheres = (double)best.st.spheres / rays;
     r->tris = (double)best.st.triangles / rays;
@@ -514,6 +549,9 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
         printf(" relMSE %.5f", r->rel_mse);
     if (r->agree >= 0.0)
         printf(" agree %.5f same-tri %.5f", r->agree, r->same_tri);
+    if (r->packet_fps > 0.0)
+        printf(" | Embree %d-ray packets %6.2f fps cpu %6.1f ms (same pixels as single rays: %.5f)", r->packet_width,
+               r->packet_fps, r->packet_cpu_ms, r->packet_agree);
     printf("\n");
     fflush(stdout);
     if (keep) {
@@ -681,6 +719,22 @@ static void write_md(FILE *f, const void *ctx)
                 r->scene, r->triangles, r->view, r->method, lod, r->build_s, r->memory_mib, r->bytes_per_tri,
                 rep.embree_mib[s], r->memory_mib / rep.embree_mib[s], r->fps, r->mrays, r->cpu_ms, r->embree_fps,
                 r->ratio, r->pops, r->tris, r->lod_hit, rel, agree, same);
+    }
+    int packets = 0;
+    for (int i = 0; i < nrows; i++)
+        packets += rows[i].packet_fps > 0.0;
+    if (!packets)
+        return;
+    fprintf(f, "\nEmbree's packet traversal (`--embree-packets`): the same frames through rtcIntersect16 (4x4 pixels) "
+               "or rtcIntersect8 (4x2), timed in the same alternation; *single* is the row's rtcIntersect1 frame.\n\n");
+    fprintf(f, "| scene | view | method | splatgi fps | Embree single fps | Embree packet fps | packet width | "
+               "packet / single | splatgi / packet | pixels as single |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < nrows; i++) {
+        const row *r = &rows[i];
+        if (r->packet_fps > 0.0)
+            fprintf(f, "| %s | %s | %s | %.2f | %.2f | %.2f | %d | %.2f | %.3f | %.5f |\n", r->scene, r->view,
+                    r->method, r->fps, r->embree_fps, r->packet_fps, r->packet_width, r->packet_fps / r->embree_fps,
+                    r->fps / r->packet_fps, r->packet_agree);
     }
 }
 

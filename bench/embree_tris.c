@@ -93,30 +93,38 @@ const char *embree_tris_version(void) { return RTC_VERSION_STRING; }
 double embree_tris_build_seconds(const embree_tris *e) { return e->dev.build_seconds; }
 size_t embree_tris_memory_bytes(const embree_tris *e) { return e->dev.memory_bytes; }
 
+/* The shading of a hit on triangle prim at barycentrics (u, v) seen along
+ * dir: invariant 2; a miss (prim RTC_INVALID_GEOMETRY_ID) gets the
+ * background. Returns 1 for a hit. */
+static int shade(const embree_tris *e, unsigned prim, float u, float w, sg_vec3 dir, float *rgb)
+{
+    if (prim == RTC_INVALID_GEOMETRY_ID) {
+        rgb[0] = 0.1f;
+        rgb[1] = 0.1f;
+        rgb[2] = 0.12f;
+        return 0;
+    }
+    const uint32_t *v = e->tris + 3 * (size_t)prim;
+    const float *n0 = e->normals + 3 * (size_t)v[0], *n1 = e->normals + 3 * (size_t)v[1];
+    const float *n2 = e->normals + 3 * (size_t)v[2];
+    float b0 = 1.0f - u - w;
+    sg_vec3 n = sg_v3_normalize(sg_v3(b0 * n0[0] + u * n1[0] + w * n2[0], b0 * n0[1] + u * n1[1] + w * n2[1],
+                                      b0 * n0[2] + u * n1[2] + w * n2[2]));
+    float k = 0.8f * (0.15f + 0.85f * fabsf(sg_v3_dot(n, dir)));
+    rgb[0] = rgb[1] = rgb[2] = k;
+    return 1;
+}
+
 /* One pixel: invariant 2. */
 static int pixel(const embree_tris *e, const sg_ray *r, float *rgb, uint32_t *id, float *t)
 {
     struct RTCRayHit rh;
     embree_device_intersect1(&e->dev, r, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-        rgb[0] = 0.1f;
-        rgb[1] = 0.1f;
-        rgb[2] = 0.12f;
-        *id = 0xFFFFFFFFu;
-        *t = INFINITY;
-        return 0;
-    }
-    const uint32_t *v = e->tris + 3 * (size_t)rh.hit.primID;
-    const float *n0 = e->normals + 3 * (size_t)v[0], *n1 = e->normals + 3 * (size_t)v[1];
-    const float *n2 = e->normals + 3 * (size_t)v[2];
-    float u = rh.hit.u, w = rh.hit.v, b0 = 1.0f - u - w;
-    sg_vec3 n = sg_v3_normalize(sg_v3(b0 * n0[0] + u * n1[0] + w * n2[0], b0 * n0[1] + u * n1[1] + w * n2[1],
-                                      b0 * n0[2] + u * n1[2] + w * n2[2]));
-    float k = 0.8f * (0.15f + 0.85f * fabsf(sg_v3_dot(n, r->dir)));
-    rgb[0] = rgb[1] = rgb[2] = k;
-    *id = rh.hit.primID;
-    *t = rh.ray.tfar;
-    return 1;
+    unsigned prim = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? RTC_INVALID_GEOMETRY_ID : rh.hit.primID;
+    int hit = shade(e, prim, rh.hit.u, rh.hit.v, r->dir, rgb);
+    *id = hit ? rh.hit.primID : 0xFFFFFFFFu;
+    *t = hit ? rh.ray.tfar : INFINITY;
+    return hit;
 }
 
 sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int width, int height, int threads,
@@ -154,6 +162,112 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
     }
     double seconds = omp_get_wtime() - t0, cpu = bench_cpu_seconds() - c0;
     *out = img;
+    if (stats) {
+        embree_tris_stats s = {0};
+        s.rays = (uint64_t)width * (uint64_t)height;
+        s.hits = hits;
+        s.seconds = seconds;
+        s.cpu_seconds = cpu;
+        s.mrays_per_s = seconds > 0.0 ? (double)s.rays / seconds * 1e-6 : 0.0;
+        *stats = s;
+    }
+    return SG_OK;
+}
+
+/* Packet geometry: PW x PH pixels per packet of N = PW * PH rays. */
+#define PACKET_MAX 16
+
+sg_status embree_tris_frame_packets(const embree_tris *e, const sg_camera *cam, int width, int height,
+                                    int threads, sg_image *out, int *width_out, embree_tris_stats *stats,
+                                    sg_error *err)
+{
+    if (!e || !cam || !out || width <= 0 || height <= 0 || threads < 0)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "embree_tris: bad frame arguments");
+    const int n16 = rtcGetDeviceProperty(e->dev.device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+    const int n8 = rtcGetDeviceProperty(e->dev.device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
+    if (!n16 && !n8)
+        return sg_error_set(err, SG_ERR_UNSUPPORTED, "embree_tris: the device traces neither 8- nor 16-wide packets");
+    const int N = n16 ? 16 : 8, PW = 4, PH = N / PW;
+    sg_image img = {0};
+    sg_status st = sg_image_alloc(&img, width, height, err);
+    if (st != SG_OK)
+        return st;
+    int tiles_x = (width + TILE - 1) / TILE, tiles_y = (height + TILE - 1) / TILE;
+    int tiles = tiles_x * tiles_y;
+    uint64_t hits = 0;
+    int nthreads = threads > 0 ? threads : omp_get_max_threads();
+    double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) reduction(+ : hits)
+    for (int t = 0; t < tiles; t++) {
+        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
+        int x1 = x0 + TILE < width ? x0 + TILE : width;
+        int y1 = y0 + TILE < height ? y0 + TILE : height;
+        for (int py = y0; py < y1; py += PH)
+            for (int px = x0; px < x1; px += PW) {
+                _Alignas(64) struct RTCRayHit16 rh;
+                _Alignas(64) int valid[PACKET_MAX];
+                sg_vec3 dirs[PACKET_MAX];
+                struct RTCIntersectContext ctx;
+                rtcInitIntersectContext(&ctx);
+                ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                for (int l = 0; l < N; l++) {
+                    int x = px + l % PW, y = py + l / PW;
+                    valid[l] = x < x1 && y < y1 ? -1 : 0;
+                    sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
+                    dirs[l] = r.dir;
+                    rh.ray.org_x[l] = r.org.x;
+                    rh.ray.org_y[l] = r.org.y;
+                    rh.ray.org_z[l] = r.org.z;
+                    rh.ray.tnear[l] = r.tmin;
+                    rh.ray.dir_x[l] = r.dir.x;
+                    rh.ray.dir_y[l] = r.dir.y;
+                    rh.ray.dir_z[l] = r.dir.z;
+                    rh.ray.time[l] = 0.0f;
+                    rh.ray.tfar[l] = r.tmax;
+                    rh.ray.mask[l] = 0xFFFFFFFFu;
+                    rh.ray.id[l] = (unsigned)l;
+                    rh.ray.flags[l] = 0;
+                    rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+                    rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+                }
+                /* RTCRayHit16's arrays hold 16 lanes; an 8-wide call reads
+                 * the same struct through RTCRayHit8's layout, so fill a
+                 * separate one (the layouts differ in their strides). */
+                if (N == 16) {
+                    rtcIntersect16(valid, e->dev.scene, &ctx, &rh);
+                } else {
+                    _Alignas(32) struct RTCRayHit8 r8;
+                    for (int l = 0; l < 8; l++) {
+                        r8.ray.org_x[l] = rh.ray.org_x[l], r8.ray.org_y[l] = rh.ray.org_y[l];
+                        r8.ray.org_z[l] = rh.ray.org_z[l], r8.ray.tnear[l] = rh.ray.tnear[l];
+                        r8.ray.dir_x[l] = rh.ray.dir_x[l], r8.ray.dir_y[l] = rh.ray.dir_y[l];
+                        r8.ray.dir_z[l] = rh.ray.dir_z[l], r8.ray.time[l] = 0.0f;
+                        r8.ray.tfar[l] = rh.ray.tfar[l], r8.ray.mask[l] = 0xFFFFFFFFu;
+                        r8.ray.id[l] = (unsigned)l, r8.ray.flags[l] = 0;
+                        r8.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+                        r8.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    rtcIntersect8(valid, e->dev.scene, &ctx, &r8);
+                    for (int l = 0; l < 8; l++) {
+                        rh.hit.geomID[l] = r8.hit.geomID[l], rh.hit.primID[l] = r8.hit.primID[l];
+                        rh.hit.u[l] = r8.hit.u[l], rh.hit.v[l] = r8.hit.v[l];
+                    }
+                }
+                for (int l = 0; l < N; l++) {
+                    if (!valid[l])
+                        continue;
+                    int x = px + l % PW, y = py + l / PW;
+                    unsigned prim = rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID ? RTC_INVALID_GEOMETRY_ID
+                                                                                : rh.hit.primID[l];
+                    hits += (uint64_t)shade(e, prim, rh.hit.u[l], rh.hit.v[l], dirs[l],
+                                            img.data + 3 * ((size_t)y * (size_t)width + (size_t)x));
+                }
+            }
+    }
+    double seconds = omp_get_wtime() - t0, cpu = bench_cpu_seconds() - c0;
+    *out = img;
+    if (width_out)
+        *width_out = N;
     if (stats) {
         embree_tris_stats s = {0};
         s.rays = (uint64_t)width * (uint64_t)height;

@@ -57,4 +57,15 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
                             sg_image *out, uint32_t *tri_ids, float *t_out, embree_tris_stats *stats,
                             sg_error *err);
 
+/* The same frame traced as coherent packets: each 16x16 tile in blocks of
+ * 4 x 4 pixels through rtcIntersect16 when the device traces 16-wide
+ * packets natively, else 4 x 2 through rtcIntersect8 (*width_out gets 16
+ * or 8). The rays, shading and tile schedule are embree_tris_frame's, so
+ * the images agree pixel for pixel up to Embree's own packet rounding.
+ * This is what the best CPU packet tracer gives on the same machine: the
+ * bound the viewer's frame-rate targets are compared with. */
+sg_status embree_tris_frame_packets(const embree_tris *e, const sg_camera *cam, int width, int height,
+                                    int threads, sg_image *out, int *width_out, embree_tris_stats *stats,
+                                    sg_error *err);
+
 #endif
