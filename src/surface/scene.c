@@ -971,16 +971,9 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     mask &= 15u;
     if (sc->iso)
         return sg_iso_intersect4(sc->iso, rays, mask, hits, stats);
-    if (sc->hybrid) { /* one by one: a ray's traversal is short (nearest first) */
-        unsigned found = 0;
-        for (unsigned m = mask; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            if (sg_hybrid_scene_intersect(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, &rays[r], &hits[r],
-                                          stats))
-                found |= 1u << r;
-        }
-        return found;
-    }
+    if (sc->hybrid) /* one walk for the four (sg_hybrid_intersect4) */
+        return sg_hybrid_scene_intersect4(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, rays, mask, hits,
+                                          stats);
     unsigned found = 0;
 #ifdef SG_SCENE_TRAVERSE4
     if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {
