@@ -536,39 +536,60 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
                           unsigned lanes, pentry *out, counters *c)
 {
     const sg_stree_bundle *B = &h->tree.bundles[cb];
-    float tin[PW][W];
-    unsigned mask[PW] = {0}, lod[PW] = {0}, any = 0;
+    float ft[PW][W];                        /* per ray: the children's floors */
+    unsigned open[PW] = {0}, any = 0;       /* per ray: children it goes on into */
     for (unsigned m = lanes; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
-        mask[i] = sg_bundle_test(B, &r[i].br, bst[i].t, tin[i], &lod[i]);
-        any |= mask[i];
+        float tin[W];
+        unsigned lod;
+        const unsigned mask = sg_bundle_test(B, &r[i].br, bst[i].t, tin, &lod);
         c->spheres += W;
+        for (int l = 0; l < W; ++l)
+            ft[i][l] = tin[l] > floor[i] ? tin[l] : floor[i];
+        open[i] = mask & ~lod;
+        for (unsigned ml = mask & lod; ml; ml &= ml - 1) {
+            const int l = __builtin_ctz(ml);
+            if (!(ft[i][l] <= bst[i].t))
+                continue; /* a disk found in this bundle is nearer */
+            if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[i][l], c) == NODE_OPEN)
+                open[i] |= 1u << l;
+        }
+        any |= open[i];
     }
-    int n = 0;
+    if (!any)
+        return 0;
+    /* Per child: the rays that go on into it, and the least of their floors. */
+    float key[W];
+    unsigned go[W] = {0};
+    for (int l = 0; l < W; ++l)
+        key[l] = INFINITY;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        for (unsigned ml = open[i]; ml; ml &= ml - 1) {
+            const int l = __builtin_ctz(ml);
+            go[l] |= 1u << i;
+            key[l] = ft[i][l] < key[l] ? ft[i][l] : key[l];
+        }
+    }
+    /* Farthest first (popped last); equal keys: the lower lane popped first. */
+    int kids[W], n = 0;
     for (unsigned ml = any; ml; ml &= ml - 1) {
         const int l = __builtin_ctz(ml);
-        const uint32_t k = cb * (uint32_t)W + (uint32_t)l;
-        pentry e;
-        e.id = k;
-        e.lanes = 0;
-        e.key = INFINITY;
-        for (unsigned m = lanes; m; m &= m - 1) {
-            const int i = __builtin_ctz(m);
-            if (!(mask[i] >> l & 1u))
-                continue;
-            const float ft = tin[i][l] > floor[i] ? tin[i][l] : floor[i]; /* the child's floor */
-            if (lod[i] >> l & 1u) {
-                if (!(ft <= bst[i].t))
-                    continue; /* a disk found in this bundle is nearer */
-                if (node_point(h, k, &r[i], &bst[i], 1, ft, c) != NODE_OPEN)
-                    continue;
-            }
-            e.t[i] = ft;
-            e.lanes |= 1u << i;
-            e.key = ft < e.key ? ft : e.key;
+        int j = n++;
+        while (j > 0 && key[kids[j - 1]] < key[l]) {
+            kids[j] = kids[j - 1];
+            --j;
         }
-        if (!e.lanes)
-            continue;
+        kids[j] = l;
+    }
+    for (int j = 0; j < n; ++j) {
+        const int l = kids[j];
+        pentry *e = &out[j];
+        for (unsigned m = go[l]; m; m &= m - 1)
+            e->t[__builtin_ctz(m)] = ft[__builtin_ctz(m)][l];
+        e->key = key[l];
+        e->id = cb * (uint32_t)W + (uint32_t)l;
+        e->lanes = go[l];
 #ifndef SG_HYBRID_NO_PREFETCH
         const uint32_t word = B->child[l];
         if (sg_stree_is_leaf(word)) {
@@ -579,12 +600,6 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
                 __builtin_prefetch(nb + o);
         }
 #endif
-        int j = n++;
-        while (j > 0 && out[j - 1].key < e.key) {
-            out[j] = out[j - 1];
-            --j;
-        }
-        out[j] = e;
     }
     return n;
 }
