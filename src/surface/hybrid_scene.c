@@ -402,7 +402,12 @@ sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s,
 {
     uint32_t ids[3];
     float w[3];
-    int n = sg_hybrid_scene_hit_sites(h, s, hit, ids, w, 3);
+    return sg_hybrid_scene_sites_albedo(h, s, ids, w, sg_hybrid_scene_hit_sites(h, s, hit, ids, w, 3));
+}
+
+sg_vec3 sg_hybrid_scene_sites_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const uint32_t *ids,
+                                     const float *w, int n)
+{
     if (n == 0)
         return sg_v3(1.0f, 1.0f, 1.0f);
     sg_vec3 c = sg_v3(0.0f, 0.0f, 0.0f);

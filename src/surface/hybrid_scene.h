@@ -99,4 +99,9 @@ void sg_hybrid_sites_filter(const sg_hybrid *h, const sg_hybrid_sites *s, float 
 /* The sites' colours blended with the hit's weights; (1, 1, 1) for a miss. */
 sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit);
 
+/* The same from the n sites and weights sg_hybrid_scene_hit_sites gave
+ * the hit (any max >= 3: a hit has at most 3 sites). */
+sg_vec3 sg_hybrid_scene_sites_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const uint32_t *ids,
+                                     const float *w, int n);
+
 #endif

@@ -587,6 +587,14 @@ sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
     return i < p->count ? sg_v3(p->ar[i], p->ag[i], p->ab[i]) : sg_v3(1.0f, 1.0f, 1.0f);
 }
 
+sg_vec3 sg_scene_hit_albedo_sites(const sg_scene *sc, const sg_hit *hit, const uint32_t *ids, const float *weights,
+                                  int n)
+{
+    if (sc->hybrid)
+        return sg_hybrid_scene_sites_albedo(sc->hybrid, &sc->hybrid_sites, ids, weights, n);
+    return sg_scene_hit_albedo(sc, hit); /* a point's own colour: the sites are not read */
+}
+
 void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
 
 sg_ray sg_scene_spawn_ray(const sg_scene *sc, const sg_hit *h, sg_vec3 dir, float tmax)
