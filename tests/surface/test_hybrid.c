@@ -58,7 +58,9 @@
  *                                  equals the blend of the hit's sites'
  *                                  colours by its weights, bit for bit, on
  *                                  random rays (triangle and LOD hits,
- *                                  misses), with and without colours.
+ *                                  misses), with and without colours;
+ *                                  sg_scene_hit_albedo_sites (the lookup's
+ *                                  sites, room for 32) gives the same bits.
  * 16. hybrid::intersect4_matches_single  packets of four rays (coherent,
  *                                  scattered and random quads; LOD off,
  *                                  on, mixed; both faces, FRONT_ONLY,
@@ -1002,6 +1004,15 @@ static void test_hybrid_albedo_is_site_blend(void **state)
                          coloured ? "coloured" : "plain", i, hit.leaf == SG_INVALID_ID ? "LOD" : "triangle", n,
                          (double)got.x, (double)got.y, (double)got.z, (double)want.x, (double)want.y,
                          (double)want.z);
+            /* the lookup's way: from the sites it found with room for 32 */
+            uint32_t ids32[32];
+            float w32[32];
+            int n32 = sg_scene_hit_sites(sc, &hit, ids32, w32, 32);
+            sg_vec3 from_sites = sg_scene_hit_albedo_sites(sc, &hit, ids32, w32, n32);
+            if (memcmp(&got, &from_sites, sizeof got) != 0)
+                fail_msg("%s mesh, ray %d: albedo %.9g %.9g %.9g, from the lookup's %d sites %.9g %.9g %.9g",
+                         coloured ? "coloured" : "plain", i, (double)got.x, (double)got.y, (double)got.z, n32,
+                         (double)from_sites.x, (double)from_sites.y, (double)from_sites.z);
         }
         print_message("%s: %zu misses, %zu triangle hits, %zu LOD hits\n", coloured ? "coloured" : "plain",
                       kinds[0], kinds[1], kinds[2]);
