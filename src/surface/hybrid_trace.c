@@ -59,7 +59,10 @@
  *  3. the stack never holds more than (W - 1) * SG_STREE_MAX_DEPTH + 1
  *     entries (sphere_tree.h invariant 3); the heap holds at most
  *     HEAP_CAP and a ray that would need more is traced again with the
- *     stack (counted in heap_overflows; same hit by invariant 2).
+ *     stack (counted in heap_overflows; same hit by invariant 2);
+ *  4. each ray of a packet (sg_hybrid_intersect4, "Packets" below) gets
+ *     its single-ray hit bit for bit (by invariant 2; test_hybrid
+ *     intersect4_matches_single).
  */
 #include <float.h>
 #include <math.h>
