@@ -437,7 +437,8 @@ static void add_stats(sg_hybrid_stats *s, const counters *c, int hit, int lod_hi
 
 /* Fills *hit from the ray's best crossing; 0 when there is none (hit
  * stays a miss). */
-static int write_hit(const sg_hybrid *h, const sg_ray *ray, const best *bst0, sg_hybrid_hit *hit)
+__attribute__((always_inline)) static inline int write_hit(const sg_hybrid *h, const sg_ray *ray, const best *bst0,
+                                                           sg_hybrid_hit *hit)
 {
     const best bst = *bst0;
     if (bst.key == UINT64_MAX)
