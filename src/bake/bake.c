@@ -350,18 +350,17 @@ void sg_bake_glossy_data(const sg_bake *b, uint32_t m, int *res, size_t *count, 
     *bins = b->gbins[m];
 }
 
-/* The lookup's splats: the MLS weights at the hit (invariant 2), keeping
- * only splats that face the way the surface at the hit does. A thin wall
+/* The lookup's splats: the n MLS weights at the hit (invariant 2; from
+ * sg_scene_hit_sites), keeping only splats that face the way the surface at the hit does. A thin wall
  * made of two layers of opposite normals within each other's support puts
  * both layers' splats in the weights; each layer's light belongs to its
  * own outer side, so the other layer's splats are dropped and the rest
  * renormalised. Returns the count; side gets the side of the hit that
  * faces wo (0 front, 1 back). */
-static int lookup_weights(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, uint32_t *ids, float *wts,
-                          int *side)
+static int keep_facing(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, uint32_t *ids, float *wts, int n,
+                       int *side)
 {
     const sg_scene *sc = sg_world_scene(w, h->model);
-    int n = sg_scene_hit_sites(sc, &h->hit, ids, wts, LOOKUP_SPLATS);
     *side = sg_v3_dot(wo, h->hit.n) < 0.0f;
     const sg_sites *ps = sg_scene_sites(sc);
     float kept = 0.0f;
@@ -379,6 +378,13 @@ static int lookup_weights(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, 
     for (int j = 0; j < k; ++j)
         wts[j] /= kept;
     return k;
+}
+
+static int lookup_weights(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, uint32_t *ids, float *wts,
+                          int *side)
+{
+    int n = sg_scene_hit_sites(sg_world_scene(w, h->model), &h->hit, ids, wts, LOOKUP_SPLATS);
+    return keep_facing(w, h, wo, ids, wts, n, side);
 }
 
 /* E = E0(n) * ratio + indirect, the ratio and the indirect light blended
@@ -422,11 +428,14 @@ sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_h
 sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo)
 {
     const sg_material *m = sg_world_material(w, h->model);
-    sg_vec3 rho = sg_world_albedo(w, h);
     uint32_t ids[LOOKUP_SPLATS], sid[LOOKUP_SPLATS];
     float wts[LOOKUP_SPLATS], sw[LOOKUP_SPLATS];
     int side;
-    int n = lookup_weights(w, h, wo, ids, wts, &side), ns = 0;
+    /* The hit's sites once, for the albedo (a hybrid hit's is their
+     * blend) and, kept facing, for the light. */
+    int n = sg_scene_hit_sites(sg_world_scene(w, h->model), &h->hit, ids, wts, LOOKUP_SPLATS), ns = 0;
+    sg_vec3 rho = sg_world_albedo_sites(w, h, ids, wts, n);
+    n = keep_facing(w, h, wo, ids, wts, n, &side);
     sg_vec3 E = irradiance_of(b, h->model, ids, wts, n, side, h->hit.n);
     int res = b->gres[h->model];
     if (!res || !sg_glossy_material(m)) /* the diffuse path, as fast as before bins */

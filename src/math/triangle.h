@@ -169,8 +169,12 @@ static inline unsigned sg_tri_intersect4_scalar(const sg_tri_ray *r, const sg_tr
 #if defined(__SSE2__)
 #include <emmintrin.h>
 
-static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
-                                         float tmax, sg_tri4_hit *out)
+/* Always inlined: with two callers in one file (the hybrid's single-ray
+ * and packet leaves) GCC otherwise calls it, and the single ray's leaf
+ * loop lost the inlining it had. */
+__attribute__((always_inline)) static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t,
+                                                                        unsigned valid, float tmin, float tmax,
+                                                                        sg_tri4_hit *out)
 {
     const __m128 sx = _mm_set1_ps(r->sx), sy = _mm_set1_ps(r->sy), sz = _mm_set1_ps(r->sz);
     const __m128 zero = _mm_setzero_ps();

@@ -492,6 +492,13 @@ sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h)
     return sg_material_albedo(&w->materials[h->model], sg_scene_hit_albedo(w->scenes[h->model], &h->hit));
 }
 
+sg_vec3 sg_world_albedo_sites(const sg_world *w, const sg_world_hit *h, const uint32_t *ids, const float *weights,
+                              int n)
+{
+    return sg_material_albedo(&w->materials[h->model],
+                              sg_scene_hit_albedo_sites(w->scenes[h->model], &h->hit, ids, weights, n));
+}
+
 sg_vec3 sg_world_site_albedo(const sg_world *w, uint32_t model, uint32_t site)
 {
     const sg_sites *s = sg_scene_sites(w->scenes[model]);

@@ -89,6 +89,11 @@ const sg_material *sg_world_material(const sg_world *w, uint32_t model);
  * colour where the material uses point colours (sg_material_albedo). */
 sg_vec3 sg_world_albedo(const sg_world *w, const sg_world_hit *h);
 
+/* sg_world_albedo(w, h), bit for bit, given the n sites and weights
+ * sg_scene_hit_sites gave h (any max >= 3; sg_scene_hit_albedo_sites). */
+sg_vec3 sg_world_albedo_sites(const sg_world *w, const sg_world_hit *h, const uint32_t *ids, const float *weights,
+                              int n);
+
 /* The same at light site `site` of model `model` (surface/sites.h). */
 sg_vec3 sg_world_site_albedo(const sg_world *w, uint32_t model, uint32_t site);
 

@@ -225,6 +225,16 @@ void sg_hybrid_destroy(sg_hybrid *h);
 int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_hit *hit,
                         sg_hybrid_stats *stats);
 
+/* sg_hybrid_intersect for the rays of `mask` (bit r: rays[r]; bits above 3
+ * ignored) in one traversal: hits[r] is what sg_hybrid_intersect(h,
+ * &rays[r], fp ? &fp[r] : NULL, ...) writes, bit for bit (any rays; a
+ * quad of neighbouring camera rays shares most of the walk). Returns the
+ * mask of rays that hit; hits outside mask are not written. fp: NULL or
+ * one footprint a ray. stats (may be NULL) count the packet's work: pops
+ * and sphere tests once per packet, triangle tests once per ray. */
+unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
+                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats);
+
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays); the same
  * acceptance as sg_hybrid_intersect, in no particular order. */
 int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats);

@@ -195,14 +195,11 @@ static void to_ray_stats(sg_ray_stats *s, const sg_hybrid_stats *hs)
     s->hits += hs->hits;
 }
 
-int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *ray,
-                              sg_hit *hit, sg_ray_stats *stats)
+/* The sg_hit of a hierarchy hit (found) or miss. */
+static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray *ray, const sg_hybrid_hit *hp,
+                     int found, sg_hit *hit)
 {
-    sg_footprint fp = footprint(lod, ray);
-    sg_hybrid_hit hh;
-    sg_hybrid_stats hs = {0};
-    int found = sg_hybrid_intersect(h, ray, lod > 0.0f ? &fp : NULL, &hh, stats ? &hs : NULL);
-    to_ray_stats(stats, &hs);
+    const sg_hybrid_hit hh = *hp;
     if (!found) {
         hit->splat = SG_INVALID_ID;
         return 0;
@@ -225,6 +222,35 @@ int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, floa
     sg_hybrid_hit_sites(h, &hh, ids, w, 1);
     hit->splat = ids[0];
     return 1;
+}
+
+int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *ray,
+                              sg_hit *hit, sg_ray_stats *stats)
+{
+    sg_footprint fp = footprint(lod, ray);
+    sg_hybrid_hit hh;
+    sg_hybrid_stats hs = {0};
+    int found = sg_hybrid_intersect(h, ray, lod > 0.0f ? &fp : NULL, &hh, stats ? &hs : NULL);
+    to_ray_stats(stats, &hs);
+    return scene_hit(h, s, ray, &hh, found, hit);
+}
+
+unsigned sg_hybrid_scene_intersect4(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray rays[4],
+                                    unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
+{
+    sg_footprint fp[4];
+    sg_hybrid_hit hh[4];
+    sg_hybrid_stats hs = {0};
+    mask &= 15u;
+    for (unsigned m = mask; m; m &= m - 1)
+        fp[__builtin_ctz(m)] = footprint(lod, &rays[__builtin_ctz(m)]);
+    unsigned found = sg_hybrid_intersect4(h, rays, mask, lod > 0.0f ? fp : NULL, hh, stats ? &hs : NULL);
+    to_ray_stats(stats, &hs);
+    for (unsigned m = mask; m; m &= m - 1) {
+        const int r = __builtin_ctz(m);
+        scene_hit(h, s, &rays[r], &hh[r], (int)(found >> r & 1u), &hits[r]);
+    }
+    return found;
 }
 
 int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, sg_ray_stats *stats)
@@ -376,7 +402,12 @@ sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s,
 {
     uint32_t ids[3];
     float w[3];
-    int n = sg_hybrid_scene_hit_sites(h, s, hit, ids, w, 3);
+    return sg_hybrid_scene_sites_albedo(h, s, ids, w, sg_hybrid_scene_hit_sites(h, s, hit, ids, w, 3));
+}
+
+sg_vec3 sg_hybrid_scene_sites_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const uint32_t *ids,
+                                     const float *w, int n)
+{
     if (n == 0)
         return sg_v3(1.0f, 1.0f, 1.0f);
     sg_vec3 c = sg_v3(0.0f, 0.0f, 0.0f);

@@ -68,6 +68,12 @@ size_t sg_hybrid_sites_memory(const sg_hybrid_sites *s);
  * triangle tests as splats, LOD disk tests as isects. */
 int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *ray,
                               sg_hit *hit, sg_ray_stats *stats);
+/* sg_hybrid_scene_intersect for the rays of mask (bits 0-3) in one
+ * traversal (sg_hybrid_intersect4): the same hits, bit for bit. Returns
+ * the mask of rays that hit; a ray of mask that misses gets splat
+ * SG_INVALID_ID. */
+unsigned sg_hybrid_scene_intersect4(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray rays[4],
+                                    unsigned mask, sg_hit hits[4], sg_ray_stats *stats);
 int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, sg_ray_stats *stats);
 
 /* The sites around a hit and their weights (sum 1): a triangle's three
@@ -92,5 +98,10 @@ void sg_hybrid_sites_filter(const sg_hybrid *h, const sg_hybrid_sites *s, float 
 
 /* The sites' colours blended with the hit's weights; (1, 1, 1) for a miss. */
 sg_vec3 sg_hybrid_scene_hit_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_hit *hit);
+
+/* The same from the n sites and weights sg_hybrid_scene_hit_sites gave
+ * the hit (any max >= 3: a hit has at most 3 sites). */
+sg_vec3 sg_hybrid_scene_sites_albedo(const sg_hybrid *h, const sg_hybrid_sites *s, const uint32_t *ids,
+                                     const float *w, int n);
 
 #endif

@@ -59,7 +59,10 @@
  *  3. the stack never holds more than (W - 1) * SG_STREE_MAX_DEPTH + 1
  *     entries (sphere_tree.h invariant 3); the heap holds at most
  *     HEAP_CAP and a ray that would need more is traced again with the
- *     stack (counted in heap_overflows; same hit by invariant 2).
+ *     stack (counted in heap_overflows; same hit by invariant 2);
+ *  4. each ray of a packet (sg_hybrid_intersect4, "Packets" below) gets
+ *     its single-ray hit bit for bit (by invariant 2; test_hybrid
+ *     intersect4_matches_single).
  */
 #include <float.h>
 #include <math.h>
@@ -432,31 +435,14 @@ static void add_stats(sg_hybrid_stats *s, const counters *c, int hit, int lod_hi
     s->heap_overflows += (uint64_t)overflow;
 }
 
-int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_hit *hit,
-                        sg_hybrid_stats *stats)
+/* Fills *hit from the ray's best crossing; 0 when there is none (hit
+ * stays a miss). */
+__attribute__((always_inline)) static inline int write_hit(const sg_hybrid *h, const sg_ray *ray, const best *bst0,
+                                                           sg_hybrid_hit *hit)
 {
-    tray r;
-    counters c = {0};
-    miss(hit);
-    if (!setup(h, ray, fp, &r)) {
-        add_stats(stats, &c, 0, 0, 0);
+    const best bst = *bst0;
+    if (bst.key == UINT64_MAX)
         return 0;
-    }
-    best bst = {.t = ray->tmax, .key = UINT64_MAX};
-    int overflow = 0;
-    if (h->desc.traversal == SG_HYBRID_TRAVERSE_HEAP) {
-        if (!trace_heap(h, &r, &bst, &c)) {
-            overflow = 1;
-            bst = (best){.t = ray->tmax, .key = UINT64_MAX};
-            trace_stack(h, &r, &bst, &c);
-        }
-    } else {
-        trace_stack(h, &r, &bst, &c);
-    }
-    if (bst.key == UINT64_MAX) {
-        add_stats(stats, &c, 0, 0, overflow);
-        return 0;
-    }
     hit->t = bst.t;
     hit->back = !bst.front;
     if (bst.key >> 32) {
@@ -466,7 +452,6 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
         hit->node = k;
         hit->p = sg_v3_madd(ray->org, ray->dir, bst.t);
         hit->ng = hit->ns = n;
-        add_stats(stats, &c, 1, 1, overflow);
         return 1;
     }
     const uint32_t i = (uint32_t)bst.key;
@@ -492,8 +477,259 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
     } else {
         hit->ns = hit->ng;
     }
-    add_stats(stats, &c, 1, 0, overflow);
     return 1;
+}
+
+int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_hit *hit,
+                        sg_hybrid_stats *stats)
+{
+    tray r;
+    counters c = {0};
+    miss(hit);
+    if (!setup(h, ray, fp, &r)) {
+        add_stats(stats, &c, 0, 0, 0);
+        return 0;
+    }
+    best bst = {.t = ray->tmax, .key = UINT64_MAX};
+    int overflow = 0;
+    if (h->desc.traversal == SG_HYBRID_TRAVERSE_HEAP) {
+        if (!trace_heap(h, &r, &bst, &c)) {
+            overflow = 1;
+            bst = (best){.t = ray->tmax, .key = UINT64_MAX};
+            trace_stack(h, &r, &bst, &c);
+        }
+    } else {
+        trace_stack(h, &r, &bst, &c);
+    }
+    const int got = write_hit(h, ray, &bst, hit);
+    add_stats(stats, &c, got, got && hit->node != SG_INVALID_ID, overflow);
+    return got;
+}
+
+/* ---- Packets: four rays, one traversal -----------------------------------
+ *
+ * sg_hybrid_intersect4 walks the tree once for up to four rays (a 2x2 quad
+ * of camera rays). An entry carries, per ray, the node's floor (as a
+ * single ray's entry does) and the mask of the rays that go on into it: a
+ * ray is in it only when it entered the node's sphere and every ancestor's,
+ * and each of those was opened for it, by the same per-ray rules
+ * (node_point on the node, the ray and the ray's own floor). So each ray
+ * reaches exactly the nodes it reaches alone, less what pruning drops, and
+ * pruning (the ray's floor beyond its own best) drops only crossings that
+ * cannot win: by invariant 2 each ray gets its single-ray hit, bit for bit,
+ * whatever order the packet takes. The order is nearest first by the least
+ * floor of the entry's rays. Sphere and triangle tests run per ray with
+ * the single-ray kernels on the ray's own best; what the rays share is the
+ * walk itself (one pop, one sort, one prefetch per node), the bundle's and
+ * the triangles' cache lines, and, for rays with one origin and one axis
+ * permutation (sg_tri_ray), the leaf's gathered vertices. */
+enum { PW = 4 };
+
+typedef struct pentry {
+    float t[PW];    /* per ray: its floor ("Order"); valid for rays in lanes */
+    float key;      /* the least floor of the rays in lanes: the order */
+    uint32_t id;    /* node id                                          */
+    uint32_t lanes; /* rays that go on into the node                    */
+} pentry;
+
+/* Children of bundle cb that the rays in `lanes` enter, nearest (least
+ * key) last; per ray, a point-sized child is decided here as push_children
+ * decides it (disk hit, skipped, or opened). Returns how many were
+ * written to out. */
+static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, const float *floor,
+                          unsigned lanes, pentry *out, counters *c)
+{
+    const sg_stree_bundle *B = &h->tree.bundles[cb];
+    float ft[PW][W];                        /* per ray: the children's floors */
+    unsigned open[PW] = {0}, any = 0;       /* per ray: children it goes on into */
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        float tin[W];
+        unsigned lod;
+        const unsigned mask = sg_bundle_test(B, &r[i].br, bst[i].t, tin, &lod);
+        c->spheres += W;
+        for (int l = 0; l < W; ++l)
+            ft[i][l] = tin[l] > floor[i] ? tin[l] : floor[i];
+        open[i] = mask & ~lod;
+        for (unsigned ml = mask & lod; ml; ml &= ml - 1) {
+            const int l = __builtin_ctz(ml);
+            if (!(ft[i][l] <= bst[i].t))
+                continue; /* a disk found in this bundle is nearer */
+            if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[i][l], c) == NODE_OPEN)
+                open[i] |= 1u << l;
+        }
+        any |= open[i];
+    }
+    if (!any)
+        return 0;
+    /* Per child: the rays that go on into it, and the least of their floors. */
+    float key[W];
+    unsigned go[W] = {0};
+    for (int l = 0; l < W; ++l)
+        key[l] = INFINITY;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        for (unsigned ml = open[i]; ml; ml &= ml - 1) {
+            const int l = __builtin_ctz(ml);
+            go[l] |= 1u << i;
+            key[l] = ft[i][l] < key[l] ? ft[i][l] : key[l];
+        }
+    }
+    /* Farthest first (popped last); equal keys: the lower lane popped first. */
+    int kids[W], n = 0;
+    for (unsigned ml = any; ml; ml &= ml - 1) {
+        const int l = __builtin_ctz(ml);
+        int j = n++;
+        while (j > 0 && key[kids[j - 1]] < key[l]) {
+            kids[j] = kids[j - 1];
+            --j;
+        }
+        kids[j] = l;
+    }
+    for (int j = 0; j < n; ++j) {
+        const int l = kids[j];
+        pentry *e = &out[j];
+        for (unsigned m = go[l]; m; m &= m - 1)
+            e->t[__builtin_ctz(m)] = ft[__builtin_ctz(m)][l];
+        e->key = key[l];
+        e->id = cb * (uint32_t)W + (uint32_t)l;
+        e->lanes = go[l];
+#ifndef SG_HYBRID_NO_PREFETCH
+        const uint32_t word = B->child[l];
+        if (sg_stree_is_leaf(word)) {
+            __builtin_prefetch(h->tri + 3 * (size_t)sg_stree_leaf_first(word));
+        } else {
+            const char *nb = (const char *)&h->tree.bundles[word];
+            for (size_t o = 0; o < sizeof(sg_stree_bundle); o += 64)
+                __builtin_prefetch(nb + o);
+        }
+#endif
+    }
+    return n;
+}
+
+/* 1 when rays a and b gather a triangle's vertices alike (sg_tri4_gather
+ * reads the origin and the axis permutation only). */
+static int same_gather(const sg_tri_ray *a, const sg_tri_ray *b)
+{
+    return a->kx == b->kx && a->ky == b->ky && a->kz == b->kz && memcmp(a->org, b->org, sizeof a->org) == 0;
+}
+
+/* test_leaf for the rays in `lanes`: each ray tests the leaf's triangles
+ * in test_leaf's order against its own best, with the same kernel; a
+ * gather is shared by the rays that gather alike. */
+static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, unsigned lanes, counters *c)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    c->triangles += count * (uint64_t)__builtin_popcount(lanes);
+    for (uint32_t g = first; g < first + count; g += 4) {
+        const uint32_t n = first + count - g < 4 ? first + count - g : 4;
+        sg_tri4 t4;
+        int gathered = -1; /* the ray whose gather t4 holds */
+        for (unsigned m = lanes; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            const tray *ri = &r[i];
+            if (gathered < 0 || !same_gather(&r[gathered].tr, &ri->tr)) {
+                for (uint32_t l = 0; l < 4; ++l) {
+                    const uint32_t *v = h->tri + 3 * (size_t)(g + (l < n ? l : 0));
+                    sg_tri4_gather(&t4, (int)l, &ri->tr, h->pos + 3 * (size_t)v[0], h->pos + 3 * (size_t)v[1],
+                                   h->pos + 3 * (size_t)v[2]);
+                }
+                gathered = i;
+            }
+            sg_tri4_hit th;
+            unsigned hm = sg_tri_intersect4(&ri->tr, &t4, (1u << n) - 1u, ri->tmin, bst[i].t, &th);
+            best *b = &bst[i];
+            for (uint32_t l = 0; hm; ++l, hm >>= 1) {
+                if (!(hm & 1u))
+                    continue;
+                const uint32_t ti = g + l;
+                const int front = (int)(th.front >> l & 1u);
+                const float t = th.t[l];
+                if (front ? !ri->accept_front : !ri->accept_back)
+                    continue;
+                if (!better(t, ti, b))
+                    continue;
+                if (ri->ray->self_r > 0.0f && t < ri->ray->self_r && sg_ray_is_self(ri->ray, t, tri_normal(h, ti)))
+                    continue;
+                b->t = t;
+                b->key = ti;
+                b->b1 = th.b1[l];
+                b->b2 = th.b2[l];
+                b->front = front;
+            }
+        }
+    }
+}
+
+static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned lanes, counters *c)
+{
+    /* Each pop pushes at most W entries and the walk is depth first, so
+     * the single ray's bound holds (invariant 3). */
+    pentry stack[STACK_CAP];
+    const float root[PW] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    int sp = push_children4(h, 0, r, bst, root, lanes, stack, c);
+    while (sp > 0) {
+        const pentry e = stack[--sp];
+        const uint32_t k = e.id;
+        unsigned go = 0;
+        for (unsigned m = e.lanes; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            if (e.t[i] > bst[i].t)
+                continue;
+            /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
+            if (r[i].cull && node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
+                continue;
+            go |= 1u << i;
+        }
+        if (!go)
+            continue;
+        c->pops++;
+        const uint32_t word = h->tree.bundles[k / W].child[k % W];
+        if (sg_stree_is_leaf(word))
+            test_leaf4(h, word, r, bst, go, c);
+        else
+            sp += push_children4(h, word, r, bst, e.t, go, stack + sp, c);
+    }
+}
+
+unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
+                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats)
+{
+    tray r[PW];
+    best bst[PW];
+    counters c = {0};
+    unsigned lanes = 0;
+    mask &= 15u;
+    for (unsigned m = mask; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        miss(&hits[i]);
+        if (!setup(h, &rays[i], fp ? &fp[i] : NULL, &r[i]))
+            continue;
+        bst[i] = (best){.t = rays[i].tmax, .key = UINT64_MAX};
+        lanes |= 1u << i;
+    }
+    if (lanes)
+        trace_stack4(h, r, bst, lanes, &c);
+    unsigned found = 0, lod_hits = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        if (write_hit(h, &rays[i], &bst[i], &hits[i])) {
+            found |= 1u << i;
+            lod_hits += hits[i].node != SG_INVALID_ID;
+        }
+    }
+    if (stats) {
+        stats->rays += (uint64_t)__builtin_popcount(mask);
+        stats->pops += c.pops;
+        stats->spheres += c.spheres;
+        stats->triangles += c.triangles;
+        stats->lod_tests += c.lod_tests;
+        stats->culled += c.culled;
+        stats->hits += (uint64_t)__builtin_popcount(found);
+        stats->lod_hits += lod_hits;
+    }
+    return found;
 }
 
 int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats)

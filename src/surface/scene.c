@@ -587,6 +587,14 @@ sg_vec3 sg_scene_hit_albedo(const sg_scene *sc, const sg_hit *hit)
     return i < p->count ? sg_v3(p->ar[i], p->ag[i], p->ab[i]) : sg_v3(1.0f, 1.0f, 1.0f);
 }
 
+sg_vec3 sg_scene_hit_albedo_sites(const sg_scene *sc, const sg_hit *hit, const uint32_t *ids, const float *weights,
+                                  int n)
+{
+    if (sc->hybrid)
+        return sg_hybrid_scene_sites_albedo(sc->hybrid, &sc->hybrid_sites, ids, weights, n);
+    return sg_scene_hit_albedo(sc, hit); /* a point's own colour: the sites are not read */
+}
+
 void sg_scene_get_info(const sg_scene *sc, sg_scene_info *info) { *info = sc->info; }
 
 sg_ray sg_scene_spawn_ray(const sg_scene *sc, const sg_hit *h, sg_vec3 dir, float tmax)
@@ -971,16 +979,9 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     mask &= 15u;
     if (sc->iso)
         return sg_iso_intersect4(sc->iso, rays, mask, hits, stats);
-    if (sc->hybrid) { /* one by one: a ray's traversal is short (nearest first) */
-        unsigned found = 0;
-        for (unsigned m = mask; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            if (sg_hybrid_scene_intersect(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, &rays[r], &hits[r],
-                                          stats))
-                found |= 1u << r;
-        }
-        return found;
-    }
+    if (sc->hybrid) /* one walk for the four (sg_hybrid_intersect4) */
+        return sg_hybrid_scene_intersect4(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, rays, mask, hits,
+                                          stats);
     unsigned found = 0;
 #ifdef SG_SCENE_TRAVERSE4
     if (mask && sc->desc.model == SG_SURFACE_MLS && can_share(rays, mask)) {

@@ -202,6 +202,14 @@ int sg_scene_hit_sites_reference(const sg_scene *scene, const sg_hit *hit, uint3
  * never from the point set directly. */
 sg_vec3 sg_scene_hit_albedo(const sg_scene *scene, const sg_hit *hit);
 
+/* sg_scene_hit_albedo(scene, hit), bit for bit, given what
+ * sg_scene_hit_sites(scene, hit, ids, weights, max) returned with any max
+ * >= 3 (n sites): a hybrid hit's albedo is the blend of those sites'
+ * colours, so a caller that has them (the lookup) need not find them
+ * twice. */
+sg_vec3 sg_scene_hit_albedo_sites(const sg_scene *scene, const sg_hit *hit, const uint32_t *ids,
+                                  const float *weights, int n);
+
 /* The point set the scene was built from (its own copy): for tools that
  * measure the reconstruction against its input (tests, benchmarks, the
  * stability map). The bake, the viewer and the reference use sites and

@@ -58,7 +58,15 @@
  *                                  equals the blend of the hit's sites'
  *                                  colours by its weights, bit for bit, on
  *                                  random rays (triangle and LOD hits,
- *                                  misses), with and without colours.
+ *                                  misses), with and without colours;
+ *                                  sg_scene_hit_albedo_sites (the lookup's
+ *                                  sites, room for 32) gives the same bits.
+ * 16. hybrid::intersect4_matches_single  packets of four rays (coherent,
+ *                                  scattered and random quads; LOD off,
+ *                                  on, mixed; both faces, FRONT_ONLY,
+ *                                  BACK_ONLY; partial masks) give each ray
+ *                                  its single-ray hit bit for bit, through
+ *                                  the hierarchy and through sg_scene.
  */
 #include "test_support.h"
 
@@ -996,6 +1004,15 @@ static void test_hybrid_albedo_is_site_blend(void **state)
                          coloured ? "coloured" : "plain", i, hit.leaf == SG_INVALID_ID ? "LOD" : "triangle", n,
                          (double)got.x, (double)got.y, (double)got.z, (double)want.x, (double)want.y,
                          (double)want.z);
+            /* the lookup's way: from the sites it found with room for 32 */
+            uint32_t ids32[32];
+            float w32[32];
+            int n32 = sg_scene_hit_sites(sc, &hit, ids32, w32, 32);
+            sg_vec3 from_sites = sg_scene_hit_albedo_sites(sc, &hit, ids32, w32, n32);
+            if (memcmp(&got, &from_sites, sizeof got) != 0)
+                fail_msg("%s mesh, ray %d: albedo %.9g %.9g %.9g, from the lookup's %d sites %.9g %.9g %.9g",
+                         coloured ? "coloured" : "plain", i, (double)got.x, (double)got.y, (double)got.z, n32,
+                         (double)from_sites.x, (double)from_sites.y, (double)from_sites.z);
         }
         print_message("%s: %zu misses, %zu triangle hits, %zu LOD hits\n", coloured ? "coloured" : "plain",
                       kinds[0], kinds[1], kinds[2]);
@@ -1003,6 +1020,121 @@ static void test_hybrid_albedo_is_site_blend(void **state)
         sg_scene_destroy(sc);
         sg_mesh_free(&m);
     }
+}
+
+/* ---- 16: packets ---------------------------------------------------------- */
+
+/* Up to four rays of a camera at eye looking at look, n x n pixels over a
+ * 40-degree view: pixel (x, y) and its neighbours `step` pixels right and
+ * down (step 1: a coherent quad; larger: scattered); random: each ray its
+ * own eye and direction. */
+static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, sg_ray rays[4])
+{
+    enum { N = 64 };
+    sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
+    sg_vec3 look = sg_v3_add(c, sg_v3_scale(random_dir(rng), 0.5f * R * sg_test_rand01(rng)));
+    sg_vec3 fw = sg_v3_normalize(sg_v3_sub(look, eye));
+    sg_vec3 rt = sg_v3_normalize(sg_v3_cross(fw, fabsf(fw.y) < 0.9f ? sg_v3(0, 1, 0) : sg_v3(1, 0, 0)));
+    sg_vec3 up = sg_v3_cross(rt, fw);
+    const float th = tanf(20.0f * 3.14159265f / 180.0f);
+    int step = kind == 0 ? 1 : 1 + (int)(16.0f * sg_test_rand01(rng));
+    int x = (int)((float)(N - step) * sg_test_rand01(rng)), y = (int)((float)(N - step) * sg_test_rand01(rng));
+    for (int r = 0; r < 4; ++r) {
+        float u = th * (2.0f * ((float)(x + (r & 1) * step) + 0.5f) / N - 1.0f);
+        float v = th * (1.0f - 2.0f * ((float)(y + (r >> 1) * step) + 0.5f) / N);
+        sg_vec3 d = sg_v3_normalize(sg_v3_add(fw, sg_v3_add(sg_v3_scale(rt, u), sg_v3_scale(up, v))));
+        rays[r] = (sg_ray){.org = eye, .dir = d, .tmin = 0.0f, .tmax = INFINITY, .flags = flags,
+                           .spread = spread * 2.0f * th / N};
+        if (kind == 2) { /* random: own eye, towards the model */
+            rays[r].org = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
+            sg_vec3 to = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * sg_test_rand01(rng)));
+            rays[r].dir = sg_v3_normalize(sg_v3_sub(to, rays[r].org));
+        }
+    }
+}
+
+/* sg_hybrid_intersect4 and sg_scene_intersect4 give each ray of a packet
+ * its single-ray hit, bit for bit (hybrid_trace.c "Packets"), on the fine
+ * sphere, the bunny and, where ../shared/data is, the 45k-triangle dragon:
+ * coherent, scattered and random quads; full detail, LOD at 1 and 4
+ * pixels (lod differing within a packet too); both faces, FRONT_ONLY,
+ * BACK_ONLY; full and partial masks, and finite tmax. */
+static void test_hybrid_intersect4_matches_single(void **state)
+{
+    (void)state;
+    sg_mesh meshes[3] = {fine_sphere(), {0}, {0}};
+    const char *names[3] = {"sphere", "bunny", "dragon"};
+    sg_error err = {0};
+    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
+        fail_msg("bunny: %s", err.message);
+    int count = 2;
+    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
+    if (path && sg_mesh_read(path, &meshes[2], &err) == SG_OK)
+        count = 3;
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const float lods[3] = {0.0f, 1.0f, 4.0f};
+    uint64_t rng = 17;
+    for (int mi = 0; mi < count; ++mi) {
+        sg_hybrid *h = build(&meshes[mi], 2);
+        sg_scene *sc = mesh_scene(&meshes[mi], 1.0f);
+        sg_hybrid_info info;
+        sg_hybrid_get_info(h, &info);
+        sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
+        float R = 0.5f * info.diagonal;
+        size_t checked = 0, hits = 0, lod_hits = 0, partly = 0;
+        for (int q = 0; q < 3000; ++q) {
+            const int kind = q % 3;
+            const uint32_t fl = flags[q / 3 % 3];
+            const float lod = lods[q / 9 % 3];
+            sg_ray rays[4];
+            quad_rays(&rng, c, R, kind, fl, lod > 0.0f ? 1.0f : 0.0f, rays);
+            if (q % 7 == 6) /* a finite tmax */
+                for (int r = 0; r < 4; ++r)
+                    rays[r].tmax = 2.0f * R * sg_test_rand01(&rng);
+            sg_footprint fp[4];
+            for (int r = 0; r < 4; ++r)
+                fp[r] = (sg_footprint){0.0f, rays[r].spread, q % 11 == 10 ? lods[r % 3] : lod};
+            const unsigned mask = q % 5 == 4 ? 0xDu : 0xFu;
+            sg_hybrid_hit four[4], one;
+            const sg_footprint *fpp = lod > 0.0f || q % 11 == 10 ? fp : NULL;
+            unsigned got = sg_hybrid_intersect4(h, rays, mask, fpp, four, NULL);
+            sg_hit sfour[4], sone;
+            unsigned sgot = sg_scene_intersect4(sc, rays, mask, sfour, NULL);
+            unsigned alone = 0;
+            for (int r = 0; r < 4; ++r) {
+                if (!(mask >> r & 1u))
+                    continue;
+                int hs = sg_hybrid_intersect(h, &rays[r], fpp ? &fp[r] : NULL, &one, NULL);
+                alone |= (unsigned)hs << r;
+                ++checked;
+                hits += (size_t)hs;
+                lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
+                if (hs != (int)(got >> r & 1u) || (hs && !same_hit(&one, &four[r])))
+                    fail_msg("%s, packet %d (kind %d, flags %u, lod %g), ray %d: alone %d (t %.9g, triangle %u, "
+                             "node %u), in four %u (t %.9g, triangle %u, node %u)",
+                             names[mi], q, kind, fl, (double)lod, r, hs, (double)one.t, one.triangle, one.node,
+                             got >> r & 1u, (double)four[r].t, four[r].triangle, four[r].node);
+                int ss = sg_scene_intersect(sc, &rays[r], &sone, NULL);
+                if (ss != (int)(sgot >> r & 1u) ||
+                    (ss && (memcmp(&sone.t, &sfour[r].t, sizeof sone.t) || memcmp(&sone.p, &sfour[r].p, sizeof sone.p) ||
+                            memcmp(&sone.n, &sfour[r].n, sizeof sone.n) || sone.splat != sfour[r].splat ||
+                            sone.leaf != sfour[r].leaf)) ||
+                    (!ss && sfour[r].splat != SG_INVALID_ID))
+                    fail_msg("%s, packet %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, "
+                             "splat %u), in four %u (t %.9g, splat %u)",
+                             names[mi], q, kind, fl, r, ss, (double)sone.t, sone.splat, sgot >> r & 1u,
+                             (double)sfour[r].t, sfour[r].splat);
+            }
+            partly += alone != 0 && alone != mask;
+        }
+        print_message("%s: %zu rays in packets, %zu hits (%zu LOD), %zu packets partly hit\n", names[mi], checked,
+                      hits, lod_hits, partly);
+        assert_true(hits > checked / 5 && hits < checked * 9 / 10 && lod_hits > 100 && partly > 100);
+        sg_scene_destroy(sc);
+        sg_hybrid_destroy(h);
+    }
+    for (int mi = 0; mi < count; ++mi)
+        sg_mesh_free(&meshes[mi]);
 }
 
 int main(void)
@@ -1024,6 +1156,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_scene_file_roundtrip),
         cmocka_unit_test(test_hybrid_sites_threads_identical),
         cmocka_unit_test(test_hybrid_albedo_is_site_blend),
+        cmocka_unit_test(test_hybrid_intersect4_matches_single),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
