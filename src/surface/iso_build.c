@@ -486,6 +486,17 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
             /* rule b: follow the surface towards the supports' edge */
             split = fine && valid > 0;
         } else if (fine) {
+            /* at a layered cell, rule c also splits where two corners'
+             * normals are more than 60 degrees apart (from two layers): f
+             * can be near-linear across the kink of max or min (a thin
+             * wall's middle just inside the cell) and pass the test below,
+             * while the corners beyond the kink carry the other layer's
+             * normal and the trilinear normal turns over between them
+             * (measured on the stability map's thin_wall: 32% of the
+             * pixels flipped before this split) */
+            for (int k = 0; k < 8 && layered && !split; ++k)
+                for (int q = k + 1; q < 8 && !split; ++q)
+                    split = sg_v3_dot(P->pn[cs[k]], P->pn[cs[q]]) < LAYER_EDGE_COS;
             /* rule c over the 19 lattice points that are not corners */
             for (int q = 0; q < 27 && !split; ++q) {
                 int ga = q % 3, gb = (q / 3) % 3, gc = q / 9;
