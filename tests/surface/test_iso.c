@@ -994,12 +994,9 @@ static void test_iso_crevice_open(void **state)
 
 /* 9. One thread and two build the same bytes (the parts are laid out in
  * a fixed order; a grid point's f is the same sum whichever cell asks). */
-static void test_iso_threads_identical(void **state)
+static void check_threads_identical(const sg_pointset *ps)
 {
-    (void)state;
-    sg_pointset ps = {0};
-    make_sphere(&ps, 30000);
-    sg_iso *a = build_iso(&ps, 1), *b = build_iso(&ps, 2);
+    sg_iso *a = build_iso(ps, 1), *b = build_iso(ps, 2);
     sg_iso_info ia, ib;
     sg_iso_get_info(a, &ia);
     sg_iso_get_info(b, &ib);
@@ -1010,6 +1007,20 @@ static void test_iso_threads_identical(void **state)
                  (unsigned long long)cb);
     sg_iso_destroy(a);
     sg_iso_destroy(b);
+}
+
+/* ... on a smooth sphere, and on a cube whose edges have layered corners
+ * (layer keys from a parallel pass, layers taken in list order). */
+static void test_iso_threads_identical(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 30000);
+    check_threads_identical(&ps);
+    sg_pointset_free(&ps);
+    float h;
+    sg_test_make_cube(&ps, 60, &h);
+    check_threads_identical(&ps);
     sg_pointset_free(&ps);
 }
 
