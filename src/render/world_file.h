@@ -30,7 +30,7 @@
  *    build (sampling, kd-tree, ISO, sphere tree, layer keys) or the
  *    layout of the stored arrays changes, so an old file is rebuilt
  *    instead of silently differing from a build (version 2: hybrid models
- *    stored, 128 scalars per model);
+ *    stored, 128 scalars per model; 3: the ISO's layered corners);
  *  - input stamps: size and modification time (ns) of every file the
  *    models read (model files, the bunny asset), kept in the file. Not
  *    content hashes: hashing a 24M-point model costs as much as reading
@@ -73,7 +73,7 @@
 #include "io/scene_file.h"
 #include "render/world.h"
 
-#define SG_WORLD_BUILDER_VERSION 2u /* raise when a build changes its output */
+#define SG_WORLD_BUILDER_VERSION 3u /* raise when a build changes its output */
 #define SG_WORLD_MAX_MODELS 160u    /* 25 sections per model (MLS) in 4096   */
 
 /* The scene hash a world file of sf carries (see above). */

@@ -70,9 +70,17 @@
  *    footprint (shadow rays, the bake's rays: spread 0) and lod = 0 always
  *    reach the leaves, bit for bit as without coarse patches.
  *
- * What it does not do: the keyed layers of mls.c (the field per group of
- * splats facing the ray near thin walls and folds) — a wall thinner than a
- * leaf cancels or closes up; hit weights for interpolating splat data;
+ *  - Layered corners (iso_build.c corner_field): where the splats covering
+ *    a corner carry layer keys (layers.h) of two or more layers more than
+ *    60 degrees apart, f is each layer's own plane distance combined as
+ *    solids (max for a convex edge or a thin wall's two sides, min for an
+ *    inner corner or a fold's two walls), with the winning layer's normal;
+ *    such cells refine one level further, so sharp edges stay sharp to
+ *    within a leaf. Elsewhere f is the single field above, bit for bit.
+ *
+ * What it does not do: the keyed groups of mls.c per ray (one value per
+ * corner, whichever way a ray comes) — a wall thinner than a layered leaf
+ * (leaf_radii x r_min / 8) still vanishes; hit weights for interpolating splat data;
  * level of detail for secondary rays (they carry no footprint yet);
  * updates after the build.
  *

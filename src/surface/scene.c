@@ -28,6 +28,7 @@
 #include "surface/hybrid_scene.h"
 #include "surface/iso.h"
 #include "surface/iso_sites.h"
+#include "surface/layers.h"
 #include "surface/mls.h"
 #include "surface/scene_int.h"
 
@@ -98,112 +99,53 @@ static uint32_t leaf_at(const sg_kdtree *t, const float x[3])
     return sg_kd_node_index(n);
 }
 
-/* Layer keys (MLS; mls.c "groups of splats"). Three steps, each a pass
- * over the splats that reads, for splat i, the leaf holding its centre
- * (which lists every splat whose support covers the centre):
- *  1. layer normals: l_i starts as n_i; each of LAYER_PASSES passes
- *     replaces it by the kernel-weighted mean, at p_i, of the layer
- *     normals within 90 degrees of it. Each pass reaches about one radius
- *     further, so the noise of single normals averages out (with k = 8
- *     neighbours in reach one pass only halves it), while the other side
- *     of a thin wall, whose normals are opposed, never enters the mean;
- *  2. folded: some splat covering p_i has a layer normal more than
- *     acos(SG_MLS_FOLD_COS) = 26 degrees from l_i (the two sides of a thin
- *     wall or part, the walls of a fold, a crease);
- *  3. keyed: i or some splat covering p_i is folded, so the key reaches
- *     every splat whose support can share a point with a folded one.
- * Keyed splats get key = l_i rounded to int8 per component (only the sign
- * of key . d is used, so 1/127 is ample), all others 0: there the field
- * is the paper's, unchanged. Measured on Lucy sampled to 250k points: 35%
- * of the splats are keyed; a single field over all of them (SG_MLS_FOLD_COS
- * = -1) lets 4x as many rays slip through the scan's thin parts, one over
- * only the opposed ones (0) 3x as many (bench_leaks, docs/surfaces.md). */
-enum { LAYER_PASSES = 3 };
+/* Layer keys (MLS; mls.c "groups of splats"; the steps in layers.c). The
+ * splats that may cover p_i are those of the kd-tree leaf holding p_i
+ * (every splat whose support box holds it), in the leaf's reference order;
+ * each splat's key goes to every reference of it. */
+typedef struct leaf_cover {
+    const sg_kdtree *t;
+    const uint32_t *leaf; /* leaf holding p_i, per splat */
+} leaf_cover;
+
+static const uint32_t *kd_leaf_cover(const void *user, size_t i, size_t *count)
+{
+    const leaf_cover *c = user;
+    uint32_t l = c->leaf[i];
+    *count = c->t->leaf_first[l + 1] - c->t->leaf_first[l];
+    return c->t->refs + c->t->leaf_first[l];
+}
+
 static sg_status layer_keys(sg_scene *sc, sg_error *err)
 {
     const sg_pointset *p = &sc->points;
     const sg_kdtree *t = &sc->tree;
     sg_splat_soa *s = &sc->soa;
     size_t n = p->count, refs = t->ref_count ? t->ref_count : 1;
-    float *l = sg_alloc_array(n, 3 * sizeof(float)), *next = sg_alloc_array(n, 3 * sizeof(float));
-    uint32_t *leaf = sg_alloc_array(n, sizeof(uint32_t));
-    uint8_t *folded = sg_alloc_array(n, 1);
+    uint32_t *leaf = sg_alloc_array(n, sizeof(uint32_t)), *key = sg_alloc_array(n, sizeof(uint32_t));
     s->key = sg_alloc_array(refs, sizeof(uint32_t));
-    if (!l || !next || !leaf || !folded || !s->key) {
-        sg_free(l);
-        sg_free(next);
+    if (!leaf || !key || !s->key) {
         sg_free(leaf);
-        sg_free(folded);
+        sg_free(key);
         return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory for %zu layer keys", n);
     }
-    const sg_kernel kernel = sc->desc.kernel;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i) {
         const float x[3] = {p->px[i], p->py[i], p->pz[i]};
         leaf[i] = leaf_at(t, x);
-        l[3 * i] = p->nx[i], l[3 * i + 1] = p->ny[i], l[3 * i + 2] = p->nz[i];
     }
-    for (int pass = 0; pass < LAYER_PASSES; ++pass) {
-#pragma omp parallel for schedule(dynamic, 1024)
-        for (size_t i = 0; i < n; ++i) {
-            const float *li = l + 3 * i;
-            double a[3] = {0, 0, 0};
-            for (size_t k = t->leaf_first[leaf[i]]; k < t->leaf_first[leaf[i] + 1]; ++k) {
-                const float *lj = l + 3 * (size_t)s->id[k];
-                if (lj[0] * li[0] + lj[1] * li[1] + lj[2] * li[2] <= 0.0f)
-                    continue;
-                float dx = p->px[i] - s->px[k], dy = p->py[i] - s->py[k], dz = p->pz[i] - s->pz[k];
-                float w = sg_mls_kernel(kernel, sqrtf(dx * dx + dy * dy + dz * dz) * s->inv_r[k]);
-                a[0] += w * lj[0], a[1] += w * lj[1], a[2] += w * lj[2];
-            }
-            double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-            for (int c = 0; c < 3; ++c) /* nothing in reach (i covers itself, so only w == 0 at the rim): keep */
-                next[3 * i + c] = len > 0.0 ? (float)(a[c] / len) : li[c];
-        }
-        float *tmp = l;
-        l = next;
-        next = tmp;
-    }
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (size_t i = 0; i < n; ++i) {
-        const float *li = l + 3 * i;
-        uint8_t o = 0;
-        for (size_t k = t->leaf_first[leaf[i]]; k < t->leaf_first[leaf[i] + 1] && !o; ++k) {
-            const float *lj = l + 3 * (size_t)s->id[k];
-            float dx = p->px[i] - s->px[k], dy = p->py[i] - s->py[k], dz = p->pz[i] - s->pz[k];
-            o = lj[0] * li[0] + lj[1] * li[1] + lj[2] * li[2] < SG_MLS_FOLD_COS &&
-                (dx * dx + dy * dy + dz * dz) * s->inv_r[k] * s->inv_r[k] < 1.0f;
-        }
-        folded[i] = o;
-    }
-    /* keyed, into next[3 i] as 0 / 1 (next is free now) */
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (size_t i = 0; i < n; ++i) {
-        int keyed = folded[i];
-        for (size_t k = t->leaf_first[leaf[i]]; k < t->leaf_first[leaf[i] + 1] && !keyed; ++k) {
-            float dx = p->px[i] - s->px[k], dy = p->py[i] - s->py[k], dz = p->pz[i] - s->pz[k];
-            keyed = folded[s->id[k]] && (dx * dx + dy * dy + dz * dz) * s->inv_r[k] * s->inv_r[k] < 1.0f;
-        }
-        next[3 * i] = (float)keyed;
-    }
+    leaf_cover cover = {t, leaf};
     size_t keyed_count = 0;
-    for (size_t i = 0; i < n; ++i)
-        keyed_count += next[3 * i] != 0.0f;
+    sg_status st = sg_layer_keys(p, sc->desc.kernel, kd_leaf_cover, &cover, key, &keyed_count, err);
+    if (st == SG_OK) {
 #pragma omp parallel for schedule(static)
-    for (size_t k = 0; k < t->ref_count; ++k) {
-        uint32_t i = s->id[k];
-        uint32_t key = 0;
-        if (next[3 * i] != 0.0f)
-            for (int c = 0; c < 3; ++c)
-                key |= (uint32_t)(uint8_t)(int8_t)lrintf(127.0f * l[3 * i + c]) << (8 * c);
-        s->key[k] = key;
+        for (size_t k = 0; k < t->ref_count; ++k)
+            s->key[k] = key[s->id[k]];
+        sc->info.keyed_count = keyed_count;
     }
-    sc->info.keyed_count = keyed_count;
-    sg_free(l);
-    sg_free(next);
     sg_free(leaf);
-    sg_free(folded);
-    return SG_OK;
+    sg_free(key);
+    return st;
 }
 
 /* SG_SURFACE_ISO: the octree over the scene's own points, its corners as

@@ -37,8 +37,9 @@
  * splats, radii per layer) and the back-hit counts in the .txt; 5: camera
  * rays without a footprint, so the ISO and hybrid surfaces' references
  * see full detail (pathtrace.c); 6: MLS passes crossings in the overhang
- * of convex keyed edges (mls.c past_back_layer). */
-#define SG_VERIFY_REF_VERSION 6u
+ * of convex keyed edges (mls.c past_back_layer); 7: the ISO's layered
+ * corners (iso_build.c corner_field). */
+#define SG_VERIFY_REF_VERSION 7u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "io/scene_file.h"
+#include "points/pointset.h"
 #include "render/world.h"
 
 const char *sg_test_tmpdir(void)
@@ -110,4 +111,51 @@ double sg_test_half_plane_area(double a, double b, double c, int i, int j)
     for (int k = 0; k < n; ++k)
         a2 += px[k] * py[(k + 1) % n] - px[(k + 1) % n] * py[k];
     return fabs(a2) * 0.5;
+}
+
+/* Points on the six faces of the cube [-1,1]^3 on a regular grid (grid
+ * points on edges belong to each face that shares them), face normals. */
+void sg_test_make_cube(sg_pointset *ps, int g, float *spacing)
+{
+    size_t n = (size_t)6 * g * g;
+    assert_int_equal(sg_pointset_alloc(ps, n, NULL), SG_OK);
+    float h = 2.0f / (float)(g - 1);
+    size_t k = 0;
+    for (int f = 0; f < 6; ++f) {
+        int axis = f / 2;
+        float side = (f & 1) ? 1.0f : -1.0f;
+        for (int i = 0; i < g; ++i)
+            for (int j = 0; j < g; ++j, ++k) {
+                float c[3], nn[3] = {0, 0, 0};
+                c[axis] = side;
+                c[(axis + 1) % 3] = -1.0f + h * (float)i;
+                c[(axis + 2) % 3] = -1.0f + h * (float)j;
+                nn[axis] = side;
+                ps->px[k] = c[0]; ps->py[k] = c[1]; ps->pz[k] = c[2];
+                ps->nx[k] = nn[0]; ps->ny[k] = nn[1]; ps->nz[k] = nn[2];
+                ps->radius[k] = 2.0f * h;
+            }
+    }
+    *spacing = h;
+}
+
+/* A two-sided square sheet of thickness `thick` in the xz-plane: the top
+ * layer (y = +thick/2) faces +y, the bottom faces -y. */
+void sg_test_make_sheet(sg_pointset *ps, int g, float thick, float *spacing)
+{
+    size_t n = (size_t)2 * g * g;
+    assert_int_equal(sg_pointset_alloc(ps, n, NULL), SG_OK);
+    float h = 2.0f / (float)(g - 1);
+    size_t k = 0;
+    for (int s = 0; s < 2; ++s)
+        for (int i = 0; i < g; ++i)
+            for (int j = 0; j < g; ++j, ++k) {
+                float side = s ? -1.0f : 1.0f;
+                ps->px[k] = -1.0f + h * (float)i;
+                ps->py[k] = side * 0.5f * thick;
+                ps->pz[k] = -1.0f + h * (float)j;
+                ps->nx[k] = 0; ps->ny[k] = side; ps->nz[k] = 0;
+                ps->radius[k] = 2.0f * h;
+            }
+    *spacing = h;
 }

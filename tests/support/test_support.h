@@ -42,6 +42,17 @@ struct sg_world *sg_test_world_from_json(const char *json);
  * The exact coverage anti-aliasing tests compare against. */
 double sg_test_half_plane_area(double a, double b, double c, int i, int j);
 
+/* Points on the six faces of the cube [-1,1]^3 on a g x g grid per face,
+ * spacing h = 2 / (g - 1) into *spacing (grid points on edges belong to
+ * each face that shares them), face normals, radius 2 h. */
+struct sg_pointset;
+void sg_test_make_cube(struct sg_pointset *ps, int g, float *spacing);
+
+/* A two-sided square sheet [-1,1]^2 of thickness `thick` in the xz-plane,
+ * g x g points a side: the top layer (y = +thick/2) faces +y, the bottom
+ * faces -y; spacing as above, radius 2 h. */
+void sg_test_make_sheet(struct sg_pointset *ps, int g, float thick, float *spacing);
+
 /* Deterministic uniform float in [0,1) from a 64-bit state (splitmix64). */
 float sg_test_rand01(uint64_t *state);
 

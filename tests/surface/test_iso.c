@@ -820,14 +820,183 @@ static void test_iso_lod_against_full_detail(void **state)
     sg_pointset_free(&ps);
 }
 
-/* 9. One thread and two build the same bytes (the parts are laid out in
- * a fixed order; a grid point's f is the same sum whichever cell asks). */
-static void test_iso_threads_identical(void **state)
+
+/* ---- layered corners (iso_build.c corner_field) ------------------------- */
+
+/* Edge of the leaves at a layered corner, at most: EDGE_FINE_EDGE (1/8)
+ * x leaf_radii (default 2) x r_min (iso_build.c). */
+static float layered_leaf(float r_min) { return 0.125f * 2.0f * r_min; }
+
+/* The cube's convex edges stay sharp. A ray aimed at the edge x = y = 1
+ * along the diagonal -(1, 1, 0) meets the surface no more than 0.42 of a
+ * layered leaf before the edge: the patch of max(f_A, f_B) = max(x - 1,
+ * y - 1) on a square grid of step e cuts a right-angled edge back by at
+ * most 0.42 e along the diagonal (worst over the edge's place in its
+ * cell; brute force over a 24 x 24 grid of places, in the test's
+ * derivation notes in docs/iso.md), plus the quantisation of f. It never
+ * bulges out: a trilinear patch interpolates the convex max from above,
+ * so no hit lies outside the cube by more than the quantisation step. The
+ * single field of the paper (before the layered corners) cut the edge by
+ * 0.22 r here (0.057 r now). And rays aimed at face x = 1 more than two layered leaves
+ * below the edge hit that face from its front, within the same bound (the
+ * patch there departs from the plane by under 0.05 of a leaf: same brute
+ * force). Their normals are not asserted to be the face's: the trilinear
+ * normal blends the two layers' corner normals over the leaves at the
+ * edge (measured: n.x >= 0.87 two leaves below it). */
+static void test_iso_convex_edge_sharp(void **state)
 {
     (void)state;
     sg_pointset ps = {0};
-    make_sphere(&ps, 30000);
-    sg_iso *a = build_iso(&ps, 1), *b = build_iso(&ps, 2);
+    float h;
+    sg_test_make_cube(&ps, 80, &h);
+    const float r = 2.0f * h, e = layered_leaf(r);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    const float bound = 0.42f * sqrtf(2.0f) * e + 2.0f * info.f_scale;
+    uint64_t rng = 5;
+    float worst = 0.0f, worst_out = 0.0f;
+    int misses = 0, off_face = 0;
+    const sg_vec3 diag = sg_v3_normalize(sg_v3(1, 1, 0));
+    for (int i = 0; i < 400; ++i) {
+        float z = 1.6f * sg_test_rand01(&rng) - 0.8f;
+        sg_vec3 aim = sg_v3(1, 1, z);
+        sg_ray ray = make_ray(sg_v3_add(aim, sg_v3_scale(diag, 2.0f)), sg_v3_scale(diag, -1.0f), SG_RAY_ANY_FACE);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            ++misses;
+            continue;
+        }
+        worst = fmaxf(worst, sg_v3_length(sg_v3_sub(hit.p, aim)));
+        float m = fmaxf(fabsf(hit.p.x), fmaxf(fabsf(hit.p.y), fabsf(hit.p.z)));
+        worst_out = fmaxf(worst_out, m - 1.0f);
+        /* below the edge on face x = 1, rising towards it from outside */
+        float depth = 2.0f * e + (r - 2.0f * e) * sg_test_rand01(&rng), slope = 0.3f + 1.5f * sg_test_rand01(&rng);
+        sg_vec3 a2 = sg_v3(1, 1 - depth, z);
+        sg_ray r2 = make_ray(sg_v3_add(a2, sg_v3(2, -2 * slope, 0)), sg_v3(-2, 2 * slope, 0), SG_RAY_FRONT_ONLY);
+        if (!sg_iso_intersect(iso, &r2, &hit, NULL) || !(fabsf(hit.p.x - 1.0f) < bound) || !(hit.n.x > 0.0f)) {
+            if (off_face < 3)
+                fprintf(stderr, "depth %g: hit (%g %g %g) n (%g %g %g)\n", (double)depth, (double)hit.p.x,
+                        (double)hit.p.y, (double)hit.p.z, (double)hit.n.x, (double)hit.n.y, (double)hit.n.z);
+            ++off_face;
+        }
+    }
+    if (misses || worst > bound || worst_out > 2.0f * info.f_scale || off_face)
+        fail_msg("convex edge: %d misses of 400, edge cut back by %g (bound %g = 0.42 sqrt 2 x leaf %g, r = %g), "
+                 "%g outside the cube, %d of 400 rays below the edge off the face",
+                 misses, (double)worst, (double)bound, (double)e, (double)r, (double)worst_out, off_face);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* A thin wall (two keyed layers back to back, half a radius apart: the
+ * stability map's thin_wall) has no holes for rays meeting it head-on
+ * from either side, and each side is seen with its own normal. max(f_top,
+ * f_bottom) = |y| - t/2 is negative inside the wall, and the wall, t =
+ * r/2 thick, holds at least one plane of corners of the layered leaves
+ * (edge <= r/4); the hit lies within one such leaf of the face. The
+ * single field's opposed normals cancelled there (before the layered
+ * corners: every ray through). */
+static void test_iso_thin_wall_closed(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    const int g = 60;
+    float h = 2.0f / (float)(g - 1), r = 2.0f * h, t = 0.5f * r;
+    sg_test_make_sheet(&ps, g, t, &h);
+    const float e = layered_leaf(r);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    uint64_t rng = 9;
+    int misses = 0, wrong = 0, rays = 0;
+    for (int i = 0; i < 300; ++i) {
+        float x = 1.6f * sg_test_rand01(&rng) - 0.8f, z = 1.6f * sg_test_rand01(&rng) - 0.8f;
+        for (int side = 0; side < 2; ++side)
+            for (int f = 0; f < 2; ++f) {
+                float s = side ? -1.0f : 1.0f;
+                sg_ray ray = make_ray(sg_v3(x, 3.0f * s, z), sg_v3(0, -s, 0), f ? SG_RAY_FRONT_ONLY : SG_RAY_ANY_FACE);
+                sg_hit hit;
+                ++rays;
+                if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+                    ++misses;
+                    continue;
+                }
+                if (!(hit.n.y * s > 0.9f) || !(fabsf(hit.p.y - s * 0.5f * t) <= e + info.f_scale)) {
+                    if (wrong < 3)
+                        fprintf(stderr, "side %d: hit y %g (face %g) n.y %g\n", side, (double)hit.p.y,
+                                (double)(s * 0.5f * t), (double)hit.n.y);
+                    ++wrong;
+                }
+            }
+    }
+    if (misses || wrong)
+        fail_msg("thin wall %g thick (r %g): %d of %d head-on rays through, %d off its face or with the other "
+                 "side's normal",
+                 (double)t, (double)r, misses, rays, wrong);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* A narrow crevice (two walls facing each other r/2 apart, each the face
+ * of a solid: the fold of a scan) is neither bridged nor closed: rays
+ * along its middle, parallel to the walls, pass through, and rays from
+ * its middle across it meet the wall ahead within a layered leaf (edge e
+ * <= r/4) of its face, with its normal. min(f_bottom, f_top) = t/2 - |y|
+ * is positive between the walls (the air) and negative beyond them, and
+ * the crevice, t = r/2 = 2 e wide, holds a plane of corners of the
+ * layered leaves. The single field's opposed normals cancelled there
+ * (before the layered corners: the walls vanished). */
+static void test_iso_crevice_open(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    const int g = 60;
+    float h = 2.0f / (float)(g - 1), r = 2.0f * h, t = 0.5f * r;
+    sg_test_make_sheet(&ps, g, t, &h);
+    for (size_t i = 0; i < ps.count; ++i) /* the sheet's normals turned inwards: two walls facing each other */
+        ps.ny[i] = -ps.ny[i];
+    sg_iso *iso = build_iso(&ps, 0);
+    uint64_t rng = 13;
+    int hits = 0;
+    for (int i = 0; i < 300; ++i) {
+        float y = 0.5f * t * (sg_test_rand01(&rng) - 0.5f), z = 1.6f * sg_test_rand01(&rng) - 0.8f;
+        sg_ray ray = make_ray(sg_v3(-0.8f, y, z), sg_v3(1, 0, 0.05f * (sg_test_rand01(&rng) - 0.5f)), SG_RAY_ANY_FACE);
+        ray.tmax = 1.6f;
+        sg_hit hit;
+        if (sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            if (hits < 3)
+                fprintf(stderr, "crevice: ray at y %g hit at (%g %g %g)\n", (double)y, (double)hit.p.x,
+                        (double)hit.p.y, (double)hit.p.z);
+            ++hits;
+        }
+    }
+    const float e = layered_leaf(r);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    int missed = 0;
+    for (int i = 0; i < 300; ++i) {
+        float x = 1.6f * sg_test_rand01(&rng) - 0.8f, z = 1.6f * sg_test_rand01(&rng) - 0.8f;
+        float s = i & 1 ? -1.0f : 1.0f;
+        sg_ray ray = make_ray(sg_v3(x, 0.0f, z), sg_v3(0, s, 0), SG_RAY_FRONT_ONLY);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL) || !(fabsf(hit.p.y - s * 0.5f * t) <= e + info.f_scale) ||
+            !(hit.n.y * s < -0.9f))
+            ++missed;
+    }
+    if (hits || missed)
+        fail_msg("crevice %g wide (r %g): %d of 300 rays along its middle met a bridge, %d of 300 across it missed "
+                 "the wall ahead",
+                 (double)t, (double)r, hits, missed);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+/* 9. One thread and two build the same bytes (the parts are laid out in
+ * a fixed order; a grid point's f is the same sum whichever cell asks). */
+static void check_threads_identical(const sg_pointset *ps)
+{
+    sg_iso *a = build_iso(ps, 1), *b = build_iso(ps, 2);
     sg_iso_info ia, ib;
     sg_iso_get_info(a, &ia);
     sg_iso_get_info(b, &ib);
@@ -838,6 +1007,20 @@ static void test_iso_threads_identical(void **state)
                  (unsigned long long)cb);
     sg_iso_destroy(a);
     sg_iso_destroy(b);
+}
+
+/* ... on a smooth sphere, and on a cube whose edges have layered corners
+ * (layer keys from a parallel pass, layers taken in list order). */
+static void test_iso_threads_identical(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 30000);
+    check_threads_identical(&ps);
+    sg_pointset_free(&ps);
+    float h;
+    sg_test_make_cube(&ps, 60, &h);
+    check_threads_identical(&ps);
     sg_pointset_free(&ps);
 }
 
@@ -909,6 +1092,9 @@ int main(void)
         cmocka_unit_test(test_iso_holes_stay_open),
         cmocka_unit_test(test_iso_quantisation_bound),
         cmocka_unit_test(test_iso_face_flags),
+        cmocka_unit_test(test_iso_convex_edge_sharp),
+        cmocka_unit_test(test_iso_thin_wall_closed),
+        cmocka_unit_test(test_iso_crevice_open),
         cmocka_unit_test(test_iso_threads_identical),
         cmocka_unit_test(test_iso_rejects_bad_input),
         cmocka_unit_test(test_iso_alloc_faults),

@@ -32,53 +32,6 @@ static void make_sphere(sg_pointset *ps, size_t n, float R, float *spacing)
     *spacing = h;
 }
 
-/* Points on the six faces of the cube [-1,1]^3 on a regular grid (grid
- * points on edges belong to each face that shares them), face normals. */
-static void make_cube(sg_pointset *ps, int g, float *spacing)
-{
-    size_t n = (size_t)6 * g * g;
-    assert_int_equal(sg_pointset_alloc(ps, n, NULL), SG_OK);
-    float h = 2.0f / (float)(g - 1);
-    size_t k = 0;
-    for (int f = 0; f < 6; ++f) {
-        int axis = f / 2;
-        float side = (f & 1) ? 1.0f : -1.0f;
-        for (int i = 0; i < g; ++i)
-            for (int j = 0; j < g; ++j, ++k) {
-                float c[3], nn[3] = {0, 0, 0};
-                c[axis] = side;
-                c[(axis + 1) % 3] = -1.0f + h * (float)i;
-                c[(axis + 2) % 3] = -1.0f + h * (float)j;
-                nn[axis] = side;
-                ps->px[k] = c[0]; ps->py[k] = c[1]; ps->pz[k] = c[2];
-                ps->nx[k] = nn[0]; ps->ny[k] = nn[1]; ps->nz[k] = nn[2];
-                ps->radius[k] = 2.0f * h;
-            }
-    }
-    *spacing = h;
-}
-
-/* A two-sided square sheet of thickness `thick` in the xz-plane: the top
- * layer (y = +thick/2) faces +y, the bottom faces -y. */
-static void make_sheet(sg_pointset *ps, int g, float thick, float *spacing)
-{
-    size_t n = (size_t)2 * g * g;
-    assert_int_equal(sg_pointset_alloc(ps, n, NULL), SG_OK);
-    float h = 2.0f / (float)(g - 1);
-    size_t k = 0;
-    for (int s = 0; s < 2; ++s)
-        for (int i = 0; i < g; ++i)
-            for (int j = 0; j < g; ++j, ++k) {
-                float side = s ? -1.0f : 1.0f;
-                ps->px[k] = -1.0f + h * (float)i;
-                ps->py[k] = side * 0.5f * thick;
-                ps->pz[k] = -1.0f + h * (float)j;
-                ps->nx[k] = 0; ps->ny[k] = side; ps->nz[k] = 0;
-                ps->radius[k] = 2.0f * h;
-            }
-    *spacing = h;
-}
-
 static sg_scene *build(const sg_pointset *ps, sg_surface_model model, sg_kernel kernel, uint32_t disable)
 {
     sg_scene_desc d = {.model = model, .kernel = kernel, .kd_disable = disable};
@@ -214,7 +167,7 @@ static void test_disk_no_holes(void **state) { (void)state; check_no_holes(SG_SU
 static sg_scene *cube_scene(sg_pointset *ps, sg_surface_model model, float *r)
 {
     float h;
-    make_cube(ps, 80, &h);
+    sg_test_make_cube(ps, 80, &h);
     *r = 2.0f * h;
     return build(ps, model, SG_KERNEL_HAT, 0);
 }
@@ -324,7 +277,7 @@ static void check_sheet(sg_surface_model model, float thick_in_radii, int expect
     const int g = 60;
     float h = 2.0f / (float)(g - 1), r = 2.0f * h;
     float thick = thick_in_radii * r;
-    make_sheet(&ps, g, thick, &h);
+    sg_test_make_sheet(&ps, g, thick, &h);
     sg_scene *s = build(&ps, model, SG_KERNEL_HAT, 0);
     uint64_t rng = 3;
     int hits = 0, rays = 0;
@@ -666,7 +619,7 @@ static void test_mls_layer_keys(void **state)
         fail_msg("noisy sphere: %zu of %zu splats keyed", info.keyed_count, info.splat_count);
     sg_scene_destroy(s);
     sg_pointset_free(&ps);
-    make_sheet(&ps, 60, 0.25f * 2.0f * 2.0f / 59.0f, &h);
+    sg_test_make_sheet(&ps, 60, 0.25f * 2.0f * 2.0f / 59.0f, &h);
     s = build(&ps, SG_SURFACE_MLS, SG_KERNEL_HAT, 0);
     sg_scene_get_info(s, &info);
     assert_int_equal(info.keyed_count, info.splat_count);
