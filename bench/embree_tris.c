@@ -93,6 +93,18 @@ const char *embree_tris_version(void) { return RTC_VERSION_STRING; }
 double embree_tris_build_seconds(const embree_tris *e) { return e->dev.build_seconds; }
 size_t embree_tris_memory_bytes(const embree_tris *e) { return e->dev.memory_bytes; }
 
+/* A frame's counters from its loop's totals. */
+static embree_tris_stats frame_stats(int width, int height, uint64_t hits, double seconds, double cpu)
+{
+    embree_tris_stats s = {0};
+    s.rays = (uint64_t)width * (uint64_t)height;
+    s.hits = hits;
+    s.seconds = seconds;
+    s.cpu_seconds = cpu;
+    s.mrays_per_s = seconds > 0.0 ? (double)s.rays / seconds * 1e-6 : 0.0;
+    return s;
+}
+
 /* The shading of a hit on triangle prim at barycentrics (u, v) seen along
  * dir: invariant 2; a miss (prim RTC_INVALID_GEOMETRY_ID) gets the
  * background. Returns 1 for a hit. */
@@ -162,15 +174,8 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
     }
     double seconds = omp_get_wtime() - t0, cpu = bench_cpu_seconds() - c0;
     *out = img;
-    if (stats) {
-        embree_tris_stats s = {0};
-        s.rays = (uint64_t)width * (uint64_t)height;
-        s.hits = hits;
-        s.seconds = seconds;
-        s.cpu_seconds = cpu;
-        s.mrays_per_s = seconds > 0.0 ? (double)s.rays / seconds * 1e-6 : 0.0;
-        *stats = s;
-    }
+    if (stats)
+        *stats = frame_stats(width, height, hits, seconds, cpu);
     return SG_OK;
 }
 
@@ -268,14 +273,7 @@ sg_status embree_tris_frame_packets(const embree_tris *e, const sg_camera *cam, 
     *out = img;
     if (width_out)
         *width_out = N;
-    if (stats) {
-        embree_tris_stats s = {0};
-        s.rays = (uint64_t)width * (uint64_t)height;
-        s.hits = hits;
-        s.seconds = seconds;
-        s.cpu_seconds = cpu;
-        s.mrays_per_s = seconds > 0.0 ? (double)s.rays / seconds * 1e-6 : 0.0;
-        *stats = s;
-    }
+    if (stats)
+        *stats = frame_stats(width, height, hits, seconds, cpu);
     return SG_OK;
 }

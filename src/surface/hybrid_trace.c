@@ -210,6 +210,37 @@ static sg_vec3 tri_normal(const sg_hybrid *h, uint32_t i)
     return sg_v3_normalize(sg_v3_cross(e1, e2));
 }
 
+/* Takes the crossings of mask (lanes of th: triangles g + lane, leaf
+ * order) that the ray accepts and that beat *b, in lane order so ties
+ * resolve as one at a time would; returns 1 when one became the best.
+ * Shared by the single-ray and the packet leaf tests (always inlined:
+ * the single-ray loop compiles as it did before packets). */
+static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const sg_tri4_hit *th,
+                                                           unsigned mask, uint32_t g, best *b)
+{
+    int found = 0;
+    for (uint32_t l = 0; mask; ++l, mask >>= 1) {
+        if (!(mask & 1u))
+            continue;
+        const uint32_t i = g + l;
+        const int front = (int)(th->front >> l & 1u);
+        const float t = th->t[l];
+        if (front ? !r->accept_front : !r->accept_back)
+            continue;
+        if (!better(t, i, b))
+            continue;
+        if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
+            continue;
+        b->t = t;
+        b->key = i;
+        b->b1 = th->b1[l];
+        b->b2 = th->b2[l];
+        b->front = front;
+        found = 1;
+    }
+    return found;
+}
+
 /* Tests the triangles of a leaf word, four at a time; returns 1 when one
  * became the best (any-hit callers stop there). Lanes are taken in leaf
  * order, so ties resolve as one at a time would. */
@@ -232,25 +263,7 @@ static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst
 #else
         unsigned mask = sg_tri_intersect4(&r->tr, &t4, (1u << n) - 1u, r->tmin, bst->t, &th);
 #endif
-        for (uint32_t l = 0; mask; ++l, mask >>= 1) {
-            if (!(mask & 1u))
-                continue;
-            const uint32_t i = g + l;
-            const int front = (int)(th.front >> l & 1u);
-            const float t = th.t[l];
-            if (front ? !r->accept_front : !r->accept_back)
-                continue;
-            if (!better(t, i, bst))
-                continue;
-            if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
-                continue;
-            bst->t = t;
-            bst->key = i;
-            bst->b1 = th.b1[l];
-            bst->b2 = th.b2[l];
-            bst->front = front;
-            found = 1;
-        }
+        found |= take_hits(h, r, &th, mask, g, bst);
     }
     return found;
 }
@@ -639,25 +652,7 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
             }
             sg_tri4_hit th;
             unsigned hm = sg_tri_intersect4(&ri->tr, &t4, (1u << n) - 1u, ri->tmin, bst[i].t, &th);
-            best *b = &bst[i];
-            for (uint32_t l = 0; hm; ++l, hm >>= 1) {
-                if (!(hm & 1u))
-                    continue;
-                const uint32_t ti = g + l;
-                const int front = (int)(th.front >> l & 1u);
-                const float t = th.t[l];
-                if (front ? !ri->accept_front : !ri->accept_back)
-                    continue;
-                if (!better(t, ti, b))
-                    continue;
-                if (ri->ray->self_r > 0.0f && t < ri->ray->self_r && sg_ray_is_self(ri->ray, t, tri_normal(h, ti)))
-                    continue;
-                b->t = t;
-                b->key = ti;
-                b->b1 = th.b1[l];
-                b->b2 = th.b2[l];
-                b->front = front;
-            }
+            take_hits(h, ri, &th, hm, g, &bst[i]);
         }
     }
 }
