@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "core/alloc.h"
+#include "core/key_slots.h"
 #include "surface/iso_int.h"
 #include "surface/layers.h"
 #include "surface/mls.h"
@@ -98,16 +99,6 @@ typedef struct part {
 static inline uint64_t point_key(uint32_t x, uint32_t y, uint32_t z)
 {
     return (uint64_t)x | ((uint64_t)y << 21) | ((uint64_t)z << 42);
-}
-
-static inline uint64_t hash64(uint64_t k)
-{
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdull;
-    k ^= k >> 33;
-    k *= 0xc4ceb9fe1a85ec53ull;
-    k ^= k >> 33;
-    return k;
 }
 
 /* Grows an array of elements of `size` bytes to hold at least `need`. */
@@ -366,28 +357,12 @@ static inline sg_vec3 grid_point(const build_ctx *c, uint32_t x, uint32_t y, uin
 static uint32_t point_slot(const build_ctx *c, part *P, size_t off, size_t n, uint32_t x, uint32_t y, uint32_t z)
 {
     uint64_t key = point_key(x, y, z);
-    if ((P->np + 1) * 2 > P->hcap) {
-        size_t nc = P->hcap ? P->hcap * 2 : 1024;
-        uint32_t *h = sg_calloc_array(nc, sizeof *h);
-        if (!h)
-            return UINT32_MAX;
-        for (size_t s = 0; s < P->np; ++s) {
-            size_t j = hash64(P->pkey[s]) & (nc - 1);
-            while (h[j])
-                j = (j + 1) & (nc - 1);
-            h[j] = (uint32_t)s + 1;
-        }
-        sg_free(P->hash);
-        P->hash = h;
-        P->hcap = nc;
-    }
-    size_t j = hash64(key) & (P->hcap - 1);
-    while (P->hash[j]) {
-        uint32_t s = P->hash[j] - 1;
-        if (P->pkey[s] == key)
-            return s;
-        j = (j + 1) & (P->hcap - 1);
-    }
+    if (!sg_key_slots_reserve(&P->hash, &P->hcap, P->pkey, P->np, 1024))
+        return UINT32_MAX;
+    size_t j;
+    uint32_t found = sg_key_slots_find(P->hash, P->hcap, P->pkey, key, &j);
+    if (found != UINT32_MAX)
+        return found;
     size_t need = P->np + 1;
     size_t cap = P->pcap;
     if (need > cap) {
@@ -685,13 +660,10 @@ typedef struct corners {
 static uint32_t corner_index(corners *C, uint64_t key, float f, sg_vec3 n)
 {
     assert(C->hcap >= 2 * (C->count + 1));
-    size_t j = hash64(key) & (C->hcap - 1);
-    while (C->hash[j]) {
-        uint32_t s = C->hash[j] - 1;
-        if (C->key[s] == key)
-            return s;
-        j = (j + 1) & (C->hcap - 1);
-    }
+    size_t j;
+    uint32_t found = sg_key_slots_find(C->hash, C->hcap, C->key, key, &j);
+    if (found != UINT32_MAX)
+        return found;
     assert(C->count < C->cap);
     uint32_t s = (uint32_t)C->count++;
     C->key[s] = key;

@@ -33,6 +33,7 @@
 #include <string.h>
 
 #include "core/alloc.h"
+#include "core/key_slots.h"
 #include "surface/mls.h"
 
 enum { LAYER_PASSES = 3 };
@@ -155,42 +156,16 @@ typedef struct cell_hash {
     uint32_t *slot; size_t scap;      /* open addressing: index + 1       */
 } cell_hash;
 
-static inline uint64_t mix64(uint64_t k)
-{
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdull;
-    k ^= k >> 33;
-    k *= 0xc4ceb9fe1a85ec53ull;
-    k ^= k >> 33;
-    return k;
-}
-
 /* Index of the cell with key k, added if new; UINT32_MAX when out of
  * memory. */
 static uint32_t cell_index(cell_hash *H, uint64_t k)
 {
-    if ((H->count + 1) * 2 > H->scap) {
-        size_t nc = H->scap ? H->scap * 2 : 4096;
-        uint32_t *s = sg_calloc_array(nc, sizeof *s);
-        if (!s)
-            return UINT32_MAX;
-        for (size_t c = 0; c < H->count; ++c) {
-            size_t j = mix64(H->key[c]) & (nc - 1);
-            while (s[j])
-                j = (j + 1) & (nc - 1);
-            s[j] = (uint32_t)c + 1;
-        }
-        sg_free(H->slot);
-        H->slot = s;
-        H->scap = nc;
-    }
-    size_t j = mix64(k) & (H->scap - 1);
-    while (H->slot[j]) {
-        uint32_t c = H->slot[j] - 1;
-        if (H->key[c] == k)
-            return c;
-        j = (j + 1) & (H->scap - 1);
-    }
+    if (!sg_key_slots_reserve(&H->slot, &H->scap, H->key, H->count, 4096))
+        return UINT32_MAX;
+    size_t j;
+    uint32_t c = sg_key_slots_find(H->slot, H->scap, H->key, k, &j);
+    if (c != UINT32_MAX)
+        return c;
     if (H->count + 1 > H->cap) {
         size_t nc = H->cap ? H->cap * 2 : 4096;
         if (!sg_realloc_array((void **)&H->key, H->cap, nc, sizeof *H->key))
@@ -200,6 +175,17 @@ static uint32_t cell_index(cell_hash *H, uint64_t k)
     H->key[H->count] = k;
     H->slot[j] = (uint32_t)H->count + 1;
     return (uint32_t)H->count++;
+}
+
+/* The grid cells [c0, c1] (per axis, inclusive) that splat i's support
+ * box overlaps. */
+static void cell_range(const sg_pointset *p, size_t i, const float lo[3], float inv_h, uint32_t c0[3], uint32_t c1[3])
+{
+    float r = p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
+    for (int a = 0; a < 3; ++a) {
+        c0[a] = (uint32_t)((x[a] - r - lo[a]) * inv_h);
+        c1[a] = (uint32_t)((x[a] + r - lo[a]) * inv_h);
+    }
 }
 
 sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *key, size_t *keyed_count,
@@ -232,12 +218,8 @@ sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *k
      * the cells) */
     size_t items = 0, fcap = 0;
     for (size_t i = 0; i < n; ++i) {
-        float r = p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
         uint32_t c0[3], c1[3];
-        for (int a = 0; a < 3; ++a) {
-            c0[a] = (uint32_t)((x[a] - r - lo[a]) * inv_h);
-            c1[a] = (uint32_t)((x[a] + r - lo[a]) * inv_h);
-        }
+        cell_range(p, i, lo, inv_h, c0, c1);
         for (uint32_t z = c0[2]; z <= c1[2]; ++z)
             for (uint32_t y = c0[1]; y <= c1[1]; ++y)
                 for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
@@ -270,12 +252,9 @@ sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *k
     g.first[H.count] = run;
     /* pass 2: fill in increasing splat order */
     for (size_t i = 0; i < n; ++i) {
-        float r = p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
+        float x[3] = {p->px[i], p->py[i], p->pz[i]};
         uint32_t c0[3], c1[3];
-        for (int a = 0; a < 3; ++a) {
-            c0[a] = (uint32_t)((x[a] - r - lo[a]) * inv_h);
-            c1[a] = (uint32_t)((x[a] + r - lo[a]) * inv_h);
-        }
+        cell_range(p, i, lo, inv_h, c0, c1);
         for (uint32_t z = c0[2]; z <= c1[2]; ++z)
             for (uint32_t y = c0[1]; y <= c1[1]; ++y)
                 for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
