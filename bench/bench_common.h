@@ -13,6 +13,34 @@
 #include "io/mesh.h"
 #include "math/vec3.h"
 
+/* A width x height frame cut into size x size tiles, numbered row by row
+ * (the last row and column may be partial): the frames' parallel schedule,
+ * one tile per OpenMP iteration. */
+typedef struct bench_tiles {
+    int width, height, size;
+    int per_row, count;
+} bench_tiles;
+
+/* Pixels [x0, x1) x [y0, y1) of one tile. */
+typedef struct bench_rect {
+    int x0, y0, x1, y1;
+} bench_rect;
+
+static inline bench_tiles bench_tiles_of(int width, int height, int size)
+{
+    bench_tiles t = {width, height, size, (width + size - 1) / size, 0};
+    t.count = t.per_row * ((height + size - 1) / size);
+    return t;
+}
+
+static inline bench_rect bench_tile(const bench_tiles *t, int i)
+{
+    bench_rect r = {(i % t->per_row) * t->size, (i / t->per_row) * t->size, 0, 0};
+    r.x1 = r.x0 + t->size < t->width ? r.x0 + t->size : t->width;
+    r.y1 = r.y0 + t->size < t->height ? r.y0 + t->size : t->height;
+    return r;
+}
+
 /* "prog: message" on stderr; returns 1, the programs' failure value
  * (so `return bench_fail(...)` ends main). */
 int bench_fail(const char *prog, const char *fmt, ...)

@@ -390,17 +390,17 @@ static sg_status hybrid_frame(const sg_hybrid *h, const sg_camera *cam, const sg
     sg_status st = sg_image_alloc(&img, IMAGE_SIZE, IMAGE_SIZE, err);
     if (st != SG_OK)
         return st;
-    const int tiles_x = IMAGE_SIZE / TILE, tiles = tiles_x * tiles_x;
+    const bench_tiles tiles = bench_tiles_of(IMAGE_SIZE, IMAGE_SIZE, TILE);
     sg_hybrid_stats total = {0};
     double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
 #pragma omp parallel num_threads(threads)
     {
         sg_hybrid_stats local = {0};
 #pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < tiles; t++) {
-            int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-            for (int y = y0; y < y0 + TILE; y++)
-                for (int x = x0; x < x0 + TILE; x++) {
+        for (int t = 0; t < tiles.count; t++) {
+            const bench_rect b = bench_tile(&tiles, t);
+            for (int y = b.y0; y < b.y1; y++)
+                for (int x = b.x0; x < b.x1; x++) {
                     sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, IMAGE_SIZE, IMAGE_SIZE);
                     size_t pix = (size_t)y * IMAGE_SIZE + (size_t)x;
                     sg_hybrid_hit hit;

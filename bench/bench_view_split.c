@@ -49,17 +49,17 @@ static double primary_pass(const sg_world *w, const sg_camera *cam, int width, i
                            int with_weights, double *sink, sg_ray_stats *stats)
 {
     sg_ray_stats st = {0};
-    int tiles_x = (width + TILE - 1) / TILE, tiles = tiles_x * ((height + TILE - 1) / TILE);
+    const bench_tiles tiles = bench_tiles_of(width, height, TILE);
     double acc = 0.0;
     double t0 = omp_get_wtime();
 #pragma omp parallel num_threads(threads) reduction(+ : acc)
     {
     sg_ray_stats mine = {0};
 #pragma omp for schedule(dynamic, 1)
-    for (int t = 0; t < tiles; ++t) {
-        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        for (int y = y0; y < y0 + TILE && y < height; ++y)
-            for (int x = x0; x < x0 + TILE && x < width; ++x) {
+    for (int t = 0; t < tiles.count; ++t) {
+        const bench_rect b = bench_tile(&tiles, t);
+        for (int y = b.y0; y < b.y1; ++y)
+            for (int x = b.x0; x < b.x1; ++x) {
                 sg_ray ray = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
                 sg_world_hit h;
                 if (!sg_world_intersect(w, &ray, &h, stats ? &mine : NULL))

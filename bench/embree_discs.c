@@ -9,6 +9,7 @@
  *     shading and the same tile schedule; only the intersector differs.
  *  3. the device, scene, build time and memory are embree_device.h's.
  */
+#include "bench_common.h"
 #include "embree_discs.h"
 
 #include "embree_device.h"
@@ -136,18 +137,15 @@ sg_status embree_discs_frame(const embree_discs *e, const sg_camera *cam, int wi
     sg_status st = sg_image_alloc(&img, width, height, err);
     if (st != SG_OK)
         return st;
-    int tiles_x = (width + TILE - 1) / TILE, tiles_y = (height + TILE - 1) / TILE;
-    int tiles = tiles_x * tiles_y;
+    const bench_tiles tiles = bench_tiles_of(width, height, TILE);
     uint64_t hits = 0;
     int nthreads = threads > 0 ? threads : omp_get_max_threads();
     double t0 = omp_get_wtime();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) reduction(+ : hits)
-    for (int t = 0; t < tiles; t++) {
-        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        int x1 = x0 + TILE < width ? x0 + TILE : width;
-        int y1 = y0 + TILE < height ? y0 + TILE : height;
-        for (int y = y0; y < y1; y++) {
-            for (int x = x0; x < x1; x++) {
+    for (int t = 0; t < tiles.count; t++) {
+        const bench_rect b = bench_tile(&tiles, t);
+        for (int y = b.y0; y < b.y1; y++) {
+            for (int x = b.x0; x < b.x1; x++) {
                 sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
                 size_t pix = (size_t)y * (size_t)width + (size_t)x;
                 int hit = embree__pixel(e, &r, img.data + 3 * pix);

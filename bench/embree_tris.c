@@ -149,18 +149,15 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
     sg_status st = sg_image_alloc(&img, width, height, err);
     if (st != SG_OK)
         return st;
-    int tiles_x = (width + TILE - 1) / TILE, tiles_y = (height + TILE - 1) / TILE;
-    int tiles = tiles_x * tiles_y;
+    const bench_tiles tiles = bench_tiles_of(width, height, TILE);
     uint64_t hits = 0;
     int nthreads = threads > 0 ? threads : omp_get_max_threads();
     double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) reduction(+ : hits)
-    for (int t = 0; t < tiles; t++) {
-        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        int x1 = x0 + TILE < width ? x0 + TILE : width;
-        int y1 = y0 + TILE < height ? y0 + TILE : height;
-        for (int y = y0; y < y1; y++)
-            for (int x = x0; x < x1; x++) {
+    for (int t = 0; t < tiles.count; t++) {
+        const bench_rect b = bench_tile(&tiles, t);
+        for (int y = b.y0; y < b.y1; y++)
+            for (int x = b.x0; x < b.x1; x++) {
                 sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
                 size_t pix = (size_t)y * (size_t)width + (size_t)x;
                 uint32_t id;
@@ -179,8 +176,39 @@ sg_status embree_tris_frame(const embree_tris *e, const sg_camera *cam, int widt
     return SG_OK;
 }
 
-/* Packet geometry: PW x PH pixels per packet of N = PW * PH rays. */
-#define PACKET_MAX 16
+/* Traces rays[0..N) (N = 8 or 16, lanes with valid[l] = 0 ignored) as one
+ * coherent packet through rtcIntersect8 or rtcIntersect16, whose ray-hit
+ * structs have the same fields at different strides; prim[l] gets the hit
+ * triangle (RTC_INVALID_GEOMETRY_ID: miss) and (u[l], v[l]) its
+ * barycentrics. */
+#define TRACE_PACKET(TYPE, CALL, N)                                                                     \
+    do {                                                                                               \
+        _Alignas(64) struct TYPE p;                                                                    \
+        struct RTCIntersectContext ctx;                                                                \
+        rtcInitIntersectContext(&ctx);                                                                 \
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;                                               \
+        for (int l = 0; l < (N); l++) {                                                                \
+            p.ray.org_x[l] = rays[l].org.x, p.ray.org_y[l] = rays[l].org.y, p.ray.org_z[l] = rays[l].org.z; \
+            p.ray.dir_x[l] = rays[l].dir.x, p.ray.dir_y[l] = rays[l].dir.y, p.ray.dir_z[l] = rays[l].dir.z; \
+            p.ray.tnear[l] = rays[l].tmin, p.ray.tfar[l] = rays[l].tmax, p.ray.time[l] = 0.0f;         \
+            p.ray.mask[l] = 0xFFFFFFFFu, p.ray.id[l] = (unsigned)l, p.ray.flags[l] = 0;               \
+            p.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID, p.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;  \
+        }                                                                                              \
+        CALL(valid, e->dev.scene, &ctx, &p);                                                           \
+        for (int l = 0; l < (N); l++) {                                                                \
+            prim[l] = p.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID ? RTC_INVALID_GEOMETRY_ID : p.hit.primID[l]; \
+            u[l] = p.hit.u[l], v[l] = p.hit.v[l];                                                      \
+        }                                                                                              \
+    } while (0)
+
+static void trace_packet(const embree_tris *e, int n, const sg_ray *rays, const int *valid, unsigned *prim,
+                         float *u, float *v)
+{
+    if (n == 16)
+        TRACE_PACKET(RTCRayHit16, rtcIntersect16, 16);
+    else
+        TRACE_PACKET(RTCRayHit8, rtcIntersect8, 8);
+}
 
 sg_status embree_tris_frame_packets(const embree_tris *e, const sg_camera *cam, int width, int height,
                                     int threads, sg_image *out, int *width_out, embree_tris_stats *stats,
@@ -192,79 +220,36 @@ sg_status embree_tris_frame_packets(const embree_tris *e, const sg_camera *cam, 
     const int n8 = rtcGetDeviceProperty(e->dev.device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
     if (!n16 && !n8)
         return sg_error_set(err, SG_ERR_UNSUPPORTED, "embree_tris: the device traces neither 8- nor 16-wide packets");
+    /* PW x PH pixels per packet of N rays */
     const int N = n16 ? 16 : 8, PW = 4, PH = N / PW;
     sg_image img = {0};
     sg_status st = sg_image_alloc(&img, width, height, err);
     if (st != SG_OK)
         return st;
-    int tiles_x = (width + TILE - 1) / TILE, tiles_y = (height + TILE - 1) / TILE;
-    int tiles = tiles_x * tiles_y;
+    const bench_tiles tiles = bench_tiles_of(width, height, TILE);
     uint64_t hits = 0;
     int nthreads = threads > 0 ? threads : omp_get_max_threads();
     double c0 = bench_cpu_seconds(), t0 = omp_get_wtime();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) reduction(+ : hits)
-    for (int t = 0; t < tiles; t++) {
-        int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        int x1 = x0 + TILE < width ? x0 + TILE : width;
-        int y1 = y0 + TILE < height ? y0 + TILE : height;
-        for (int py = y0; py < y1; py += PH)
-            for (int px = x0; px < x1; px += PW) {
-                _Alignas(64) struct RTCRayHit16 rh;
-                _Alignas(64) int valid[PACKET_MAX];
-                sg_vec3 dirs[PACKET_MAX];
-                struct RTCIntersectContext ctx;
-                rtcInitIntersectContext(&ctx);
-                ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int t = 0; t < tiles.count; t++) {
+        const bench_rect b = bench_tile(&tiles, t);
+        for (int py = b.y0; py < b.y1; py += PH)
+            for (int px = b.x0; px < b.x1; px += PW) {
+                sg_ray rays[16];
+                _Alignas(64) int valid[16];
+                unsigned prim[16];
+                float u[16], v[16];
                 for (int l = 0; l < N; l++) {
                     int x = px + l % PW, y = py + l / PW;
-                    valid[l] = x < x1 && y < y1 ? -1 : 0;
-                    sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
-                    dirs[l] = r.dir;
-                    rh.ray.org_x[l] = r.org.x;
-                    rh.ray.org_y[l] = r.org.y;
-                    rh.ray.org_z[l] = r.org.z;
-                    rh.ray.tnear[l] = r.tmin;
-                    rh.ray.dir_x[l] = r.dir.x;
-                    rh.ray.dir_y[l] = r.dir.y;
-                    rh.ray.dir_z[l] = r.dir.z;
-                    rh.ray.time[l] = 0.0f;
-                    rh.ray.tfar[l] = r.tmax;
-                    rh.ray.mask[l] = 0xFFFFFFFFu;
-                    rh.ray.id[l] = (unsigned)l;
-                    rh.ray.flags[l] = 0;
-                    rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
-                    rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+                    valid[l] = x < b.x1 && y < b.y1 ? -1 : 0;
+                    rays[l] = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
                 }
-                /* RTCRayHit16's arrays hold 16 lanes; an 8-wide call reads
-                 * the same struct through RTCRayHit8's layout, so fill a
-                 * separate one (the layouts differ in their strides). */
-                if (N == 16) {
-                    rtcIntersect16(valid, e->dev.scene, &ctx, &rh);
-                } else {
-                    _Alignas(32) struct RTCRayHit8 r8;
-                    for (int l = 0; l < 8; l++) {
-                        r8.ray.org_x[l] = rh.ray.org_x[l], r8.ray.org_y[l] = rh.ray.org_y[l];
-                        r8.ray.org_z[l] = rh.ray.org_z[l], r8.ray.tnear[l] = rh.ray.tnear[l];
-                        r8.ray.dir_x[l] = rh.ray.dir_x[l], r8.ray.dir_y[l] = rh.ray.dir_y[l];
-                        r8.ray.dir_z[l] = rh.ray.dir_z[l], r8.ray.time[l] = 0.0f;
-                        r8.ray.tfar[l] = rh.ray.tfar[l], r8.ray.mask[l] = 0xFFFFFFFFu;
-                        r8.ray.id[l] = (unsigned)l, r8.ray.flags[l] = 0;
-                        r8.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
-                        r8.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
-                    }
-                    rtcIntersect8(valid, e->dev.scene, &ctx, &r8);
-                    for (int l = 0; l < 8; l++) {
-                        rh.hit.geomID[l] = r8.hit.geomID[l], rh.hit.primID[l] = r8.hit.primID[l];
-                        rh.hit.u[l] = r8.hit.u[l], rh.hit.v[l] = r8.hit.v[l];
-                    }
-                }
+                trace_packet(e, N, rays, valid, prim, u, v);
                 for (int l = 0; l < N; l++) {
                     if (!valid[l])
                         continue;
                     int x = px + l % PW, y = py + l / PW;
-                    unsigned prim = rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID ? RTC_INVALID_GEOMETRY_ID
-                                                                                : rh.hit.primID[l];
-                    hits += (uint64_t)shade(e, prim, rh.hit.u[l], rh.hit.v[l], dirs[l],
+                    hits += (uint64_t)shade(e, prim[l], u[l], v[l], rays[l].dir,
                                             img.data + 3 * ((size_t)y * (size_t)width + (size_t)x));
                 }
             }
