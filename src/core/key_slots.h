@@ -20,6 +20,13 @@
 
 #include "core/alloc.h"
 
+/* The key of integer grid coordinates of up to 21 bits each (a grid cell
+ * or point: layers.c, iso_build.c). */
+static inline uint64_t sg_key_grid3(uint32_t x, uint32_t y, uint32_t z)
+{
+    return (uint64_t)x | (uint64_t)y << 21 | (uint64_t)z << 42;
+}
+
 /* A 64-bit finaliser (MurmurHash3's fmix64 constants): grid keys differ in
  * their low bits per axis, so they are mixed before masking. */
 static inline uint64_t sg_key_mix64(uint64_t k)

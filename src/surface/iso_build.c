@@ -96,11 +96,6 @@ typedef struct part {
     int nomem;
 } part;
 
-static inline uint64_t point_key(uint32_t x, uint32_t y, uint32_t z)
-{
-    return (uint64_t)x | ((uint64_t)y << 21) | ((uint64_t)z << 42);
-}
-
 /* Grows an array of elements of `size` bytes to hold at least `need`. */
 static int grow(void **p, size_t *cap, size_t need, size_t size)
 {
@@ -356,7 +351,7 @@ static inline sg_vec3 grid_point(const build_ctx *c, uint32_t x, uint32_t y, uin
  * out of memory. */
 static uint32_t point_slot(const build_ctx *c, part *P, size_t off, size_t n, uint32_t x, uint32_t y, uint32_t z)
 {
-    uint64_t key = point_key(x, y, z);
+    uint64_t key = sg_key_grid3(x, y, z);
     if (!sg_key_slots_reserve(&P->hash, &P->hcap, P->pkey, P->np, 1024))
         return UINT32_MAX;
     size_t j;

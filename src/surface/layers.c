@@ -223,7 +223,7 @@ sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *k
         for (uint32_t z = c0[2]; z <= c1[2]; ++z)
             for (uint32_t y = c0[1]; y <= c1[1]; ++y)
                 for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
-                    uint32_t c = cell_index(&H, (uint64_t)xx | (uint64_t)y << 21 | (uint64_t)z << 42);
+                    uint32_t c = cell_index(&H, sg_key_grid3(xx, y, z));
                     if (c == UINT32_MAX)
                         goto nomem;
                     if (c >= fcap) {
@@ -258,12 +258,12 @@ sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *k
         for (uint32_t z = c0[2]; z <= c1[2]; ++z)
             for (uint32_t y = c0[1]; y <= c1[1]; ++y)
                 for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
-                    uint32_t c = cell_index(&H, (uint64_t)xx | (uint64_t)y << 21 | (uint64_t)z << 42);
+                    uint32_t c = cell_index(&H, sg_key_grid3(xx, y, z));
                     g.items[fill[c]++] = (uint32_t)i;
                 }
         uint32_t cx = (uint32_t)((x[0] - lo[0]) * inv_h), cy = (uint32_t)((x[1] - lo[1]) * inv_h),
                  cz = (uint32_t)((x[2] - lo[2]) * inv_h);
-        g.cell_of[i] = cell_index(&H, (uint64_t)cx | (uint64_t)cy << 21 | (uint64_t)cz << 42);
+        g.cell_of[i] = cell_index(&H, sg_key_grid3(cx, cy, cz));
     }
     st = sg_layer_keys(p, kernel, grid_cover, &g, key, keyed_count, err);
     goto done;
