@@ -37,27 +37,6 @@ static sg_vec3 random_dir(uint64_t *rng)
     return sg_v3(r * cosf(phi), r * sinf(phi), z);
 }
 
-/* A square wall in the xz-plane, |x|, |z| <= 1, of two g x g layers
- * `thick` apart: the top layer faces +y, the bottom one -y (a wall of a
- * room, a sheet of paper). Radius 2h. */
-static void make_wall(sg_pointset *ps, int g, float thick, float *radius)
-{
-    assert_int_equal(sg_pointset_alloc(ps, (size_t)2 * g * g, NULL), SG_OK);
-    float h = 2.0f / (float)(g - 1);
-    size_t k = 0;
-    for (int s = 0; s < 2; ++s)
-        for (int i = 0; i < g; ++i)
-            for (int j = 0; j < g; ++j, ++k) {
-                float side = s ? -1.0f : 1.0f;
-                ps->px[k] = -1.0f + h * (float)i;
-                ps->py[k] = side * 0.5f * thick;
-                ps->pz[k] = -1.0f + h * (float)j;
-                ps->nx[k] = 0, ps->ny[k] = side, ps->nz[k] = 0;
-                ps->radius[k] = 2.0f * h;
-            }
-    *radius = 2.0f * h;
-}
-
 /* The rotation of the tilted walls: 35 degrees about x, then 20 about z,
  * so that no axis of the kd-tree is the wall's (cell shrinking slices a
  * cell along the dominant axis of its normals, which cancel in a wall). */
@@ -84,7 +63,10 @@ static void check_thin_wall(sg_surface_model model, float thick_in_radii, int ti
     const int g = 60;
     float r = 2.0f * 2.0f / (float)(g - 1);
     sg_pointset ps = {0};
-    make_wall(&ps, g, thick_in_radii * r, &r);
+    float h;
+    /* a wall of a room, a sheet of paper: two g x g layers, radius 2h */
+    sg_test_make_sheet(&ps, g, thick_in_radii * r, &h);
+    r = 2.0f * h;
     float half = 0.5f * thick_in_radii * r;
     for (size_t i = 0; tilted && i < ps.count; ++i) {
         sg_vec3 p = rot(sg_pointset_position(&ps, i), 0), n = rot(sg_pointset_normal(&ps, i), 0);
