@@ -38,8 +38,10 @@
  * rays without a footprint, so the ISO and hybrid surfaces' references
  * see full detail (pathtrace.c); 6: MLS passes crossings in the overhang
  * of convex keyed edges (mls.c past_back_layer); 7: the ISO's layered
- * corners (iso_build.c corner_field). */
-#define SG_VERIFY_REF_VERSION 7u
+ * corners (iso_build.c corner_field); 8: the ISO's self test reads the
+ * surface's normal, not the one turned to the crossing's side (iso.c
+ * accept). */
+#define SG_VERIFY_REF_VERSION 8u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */
