@@ -68,6 +68,7 @@ static void model_free(sg_bake_job_model *x)
     sg_free(x->e0);
     sg_free(x->nearest);
     sg_free(x->indirect);
+    sg_free(x->off_surface);
     memset(x, 0, sizeof *x);
 }
 
@@ -95,6 +96,18 @@ static sg_status setup_models(sg_bake_job *j, sg_error *err)
             if (st != SG_OK)
                 return st;
             x->s0 = (d->sample_spacing > 0.0f ? d->sample_spacing : sg_samples_default_spacing(mat)) * med;
+        }
+        if (x->s0 > 0.0f) { /* sites off the surface are only interpolated to */
+            if (!(x->off_surface = sg_alloc_array(x->ps->count, sizeof *x->off_surface)))
+                return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu splats", x->ps->count);
+            if (sg_transport_off_surface_sites(j->w, (uint32_t)m, threads, x->off_surface) > 0) {
+                x->view = *x->ps;
+                x->view.unsampled = x->off_surface;
+                x->ps = &x->view;
+            } else {
+                sg_free(x->off_surface);
+                x->off_surface = NULL;
+            }
         }
         if (!direct)
             continue;

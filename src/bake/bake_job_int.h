@@ -24,7 +24,10 @@
 
 /* One model's part of the job. */
 typedef struct sg_bake_job_model {
-    const sg_sites *ps;
+    const sg_sites *ps;  /* the scene's sites, or &view                    */
+    sg_sites view;       /* the scene's sites, unsampled = off_surface       */
+    uint8_t *off_surface; /* per site: 1 = names no surface (transport.h
+                            sg_transport_off_surface_sites); NULL: none   */
     float s0;            /* spacing of level 0; <= 0: every splat is a sample */
     int sampled;         /* the model has sample points                      */
     uint64_t key_base;   /* splats of the models before it: random streams   */

@@ -191,6 +191,8 @@ sg_status sg_samples_thin(const sg_sites *ps, float spacing, float normal_cos, c
     float s2 = spacing * spacing;
     for (size_t c = 0; c < ncand; ++c) {
         uint32_t i = candidates ? candidates[c] : (uint32_t)c;
+        if (ps->unsampled && ps->unsampled[i])
+            continue;
         sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i);
         uint32_t heads[27];
         grid_around(&g, p, heads);

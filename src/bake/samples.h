@@ -8,9 +8,10 @@
  *  - thinning (sg_samples_thin): visits candidate splats in a fixed order
  *    (index order) and accepts one when no accepted sample facing the same
  *    way (normal dot >= normal_cos) lies closer than the spacing s: a
- *    greedy Poisson-disk subset. A uniform grid hash of cell size s finds
+ *    greedy Poisson-disk subset. Sites marked unsampled (sites.h) are
+ *    never accepted. A uniform grid hash of cell size s finds
  *    the neighbours. Guarantees (tested): no two same-facing samples closer
- *    than s; every candidate has a same-facing sample within s.
+ *    than s; every candidate not unsampled has a same-facing sample within s.
  *  - refinement (sg_samples_refine): where a sample's value (luminance)
  *    differs from a same-facing neighbour sample's by more than a relative
  *    threshold and beyond its noise (a shadow boundary, a contact shadow),

@@ -154,32 +154,92 @@ static float power_weight(float own, float other)
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
+/* Crossings a site's way down to its surface passes over (steep ones, of
+ * a wall at a concave edge) before it takes one. */
+enum { PROJECT_TRIES = 4 };
+
+/* The surface a site names: the first crossing facing its way (normal
+ * within 60 degrees of n) that a ray down the site's normal from one
+ * reach above it meets within a reach of the site, passing over crossings
+ * of surfaces facing elsewhere (the rounding of a wall where it meets a
+ * floor). flags: the faces the ray takes. Returns 0 when there is none,
+ * and when a crossing it meets first is an exit (flags 0 only): then the
+ * way down begins inside the model. */
+static int site_surface(const sg_scene *sc, uint32_t site, uint32_t flags, sg_hit *out)
+{
+    const sg_sites *ps = sg_scene_sites(sc);
+    sg_vec3 p = sg_sites_position(ps, site), n = sg_sites_normal(ps, site);
+    float r = ps->radius[site];
+    sg_ray down = {.org = sg_v3_madd(p, n, r), .dir = sg_v3_scale(n, -1.0f), .tmin = 0.0f, .tmax = 2.0f * r,
+                   .flags = flags};
+    for (int k = 0; k < PROJECT_TRIES; ++k) {
+        sg_hit h;
+        if (!sg_scene_intersect(sc, &down, &h, NULL))
+            return 0;
+        float c = sg_v3_dot(h.n, n);
+        if (c < 0.0f) /* an exit (either face): begun inside */
+            return 0;
+        if (c > 0.5f) {
+            if (!(fabsf(h.t - r) < r))
+                return 0;
+            *out = h;
+            return 1;
+        }
+        down.tmin = nextafterf(h.t, INFINITY);
+    }
+    return 0;
+}
+
 /* Where the rays of a splat's sites start: the point of the model's
- * surface over the splat's centre and the surface's normal there, found by
- * a ray down the splat's normal from one radius above it. A splat's centre
- * lies off the surface it makes (below it in a concave fold, where the
- * smooth surface bridges the fold): rays from the centre would see the
- * fold's walls from too deep and darken it, where the reference and the
- * viewer shade the surface itself. Where the ray finds no crossing within
- * a radius of the centre facing the same way, the splat's own centre and
- * normal. The ray leaves from the surface it names (ray.h): its outward
- * normal decides the front/back expectation and the self test, whatever
- * the side. */
+ * surface over the splat's centre and the surface's normal there
+ * (site_surface, front faces). A splat's centre lies off the surface it
+ * makes (below it in a concave fold, where the smooth surface bridges the
+ * fold): rays from the centre would see the fold's walls from too deep
+ * and darken it, where the reference and the viewer shade the surface
+ * itself. Where there is none, the splat's own centre and normal. The ray
+ * leaves from the surface it names (ray.h): its outward normal decides the
+ * front/back expectation and the self test, whatever the side. */
 static sg_world_hit site_on_surface(const sg_world *w, uint32_t m, uint32_t splat)
 {
     const sg_scene *sc = sg_world_scene(w, m);
-    const sg_sites *ps = sg_scene_sites(sc);
-    sg_vec3 p = sg_sites_position(ps, splat), n = sg_sites_normal(ps, splat);
-    float r = ps->radius[splat];
     sg_world_hit self = {.hit = sg_scene_site_hit(sc, splat), .model = m};
-    sg_ray down = {.org = sg_v3_madd(p, n, r), .dir = sg_v3_scale(n, -1.0f), .tmin = 0.0f, .tmax = 2.0f * r,
-                   .flags = SG_RAY_FRONT_ONLY};
     sg_hit h;
-    if (sg_scene_intersect(sc, &down, &h, NULL) && fabsf(h.t - r) < r && sg_v3_dot(h.n, n) > 0.5f) {
+    if (site_surface(sc, splat, SG_RAY_FRONT_ONLY, &h)) {
         self.hit.p = h.p;
         self.hit.n = h.n;
     }
     return self;
+}
+
+/* Whether a site names no surface it can light from outside, so that it
+ * must not be a sample point (sites.h unsampled). Either its way down
+ * (site_surface, here accepting either face) begins inside the model --
+ * the site lies on a stretch of surface walled in by another, as an
+ * octree's corners beyond a concave edge do, where the smooth surface of
+ * a floor runs on under the wall's rounding, a pocket a few hundredths
+ * deep -- or it finds no surface facing the site's way within a reach,
+ * and the site's rays would leave from the site itself, off the surface:
+ * an octree corner under a floor at the foot of a wall, inside the wall,
+ * or a splat on a sharp edge. Rays spawned inside pass walls from behind,
+ * which spawned rays do not see, and read the sky (room bake on the ISO:
+ * floor corners at a wall's foot 10-25 times too bright). */
+static int site_off_surface(const sg_world *w, uint32_t m, uint32_t site)
+{
+    sg_hit h;
+    return !site_surface(sg_world_scene(w, m), site, 0, &h);
+}
+
+size_t sg_transport_off_surface_sites(const sg_world *w, uint32_t m, int threads, uint8_t *out)
+{
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, m));
+    int nt = threads > 0 ? threads : omp_get_max_threads();
+    size_t off = 0;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(+ : off) num_threads(nt)
+    for (size_t i = 0; i < ps->count; ++i) {
+        out[i] = (uint8_t)site_off_surface(w, m, (uint32_t)i);
+        off += out[i];
+    }
+    return off;
 }
 
 /* One traced ray of a site. */

@@ -108,6 +108,17 @@ sg_transport_desc sg_transport_desc_resolve(const sg_transport_desc *d);
 sg_status sg_transport_gather(const sg_world *w, uint32_t m, const sg_sample_set *set, uint64_t key_base,
                               const sg_transport_desc *d, sg_site_data *sd, sg_error *err);
 
+/* Marks the sites of model m that name no surface they can light from
+ * outside (out[i] = 1, else 0): those whose way down to their surface
+ * (one reach above them, along -n, either face) meets an exit first or
+ * no crossing facing their way within a reach. Their rays would leave from
+ * inside the model or off its surface (an octree's corners under a floor
+ * at a wall's foot, in the pocket where a floor's smooth surface runs on
+ * under a wall) and pass walls from behind, so they must not be sample
+ * points (sites.h unsampled). Returns how many; deterministic, any thread
+ * count. */
+size_t sg_transport_off_surface_sites(const sg_world *w, uint32_t m, int threads, uint8_t *out);
+
 /* For the distributed bake (bake/bake_comm.h): the sites of all of sd's
  * samples as bytes, in this build's native layout (u64 samples, u64 hits,
  * then ratio, unshadowed, sigma, dist, the hits per site as u64, and the

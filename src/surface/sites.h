@@ -19,6 +19,7 @@
 #define SG_SURFACE_SITES_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "math/vec3.h"
 #include "points/pointset.h"
@@ -30,6 +31,9 @@ typedef struct sg_sites {
     const float *radius;       /* reach, > 0                 */
     const float *ar, *ag, *ab; /* the points' colour there (linear RGB): the
                                   material input of light arriving at it */
+    const uint8_t *unsampled;  /* per site, nonzero: never a sample point of
+                                  a bake, only interpolated to (a site off
+                                  the surface, bake/transport.h); NULL: none */
 } sg_sites;
 
 static inline sg_vec3 sg_sites_position(const sg_sites *s, size_t i)

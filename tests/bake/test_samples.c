@@ -228,6 +228,39 @@ static void test_samples_nearest(void **state)
     thinned_free(&t);
 }
 
+/* Sites marked unsampled (sites.h: off the surface) are never accepted,
+ * and every other site still has a same-facing sample within the spacing
+ * (the thinning's coverage guarantee, over the sites it may take). Fails
+ * if the mark is ignored: every second splat is marked, so about half the
+ * samples would be marked ones. */
+static void test_samples_thin_skips_unsampled(void **state)
+{
+    (void)state;
+    thinned t = thin_builtin("sphere", 6000, 4.0f);
+    uint8_t *mark = sg_alloc_array(t.ps->count, sizeof *mark);
+    assert_non_null(mark);
+    for (size_t i = 0; i < t.ps->count; ++i)
+        mark[i] = (uint8_t)(i & 1u);
+    sg_sites view = *t.ps;
+    view.unsampled = mark;
+    sg_sample_set set = {0};
+    assert_int_equal(sg_samples_thin(&view, t.s, COS, NULL, 0, 0, &set, NULL), SG_OK);
+    assert_true(set.count > 20);
+    for (size_t a = 0; a < set.count; ++a)
+        if (mark[set.splat[a]])
+            fail_msg("sample %zu is splat %u, marked unsampled", a, set.splat[a]);
+    for (size_t i = 0; i < t.ps->count; i += 2) {
+        int covered = 0;
+        for (size_t a = 0; a < set.count && !covered; ++a)
+            covered = same_facing(t.ps, i, set.splat[a]) && d2(t.ps, i, set.splat[a]) <= t.s * t.s;
+        if (!covered)
+            fail_msg("splat %zu has no same-facing sample within %g", i, t.s);
+    }
+    sg_sample_set_free(&set);
+    sg_free(mark);
+    thinned_free(&t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -235,6 +268,7 @@ int main(void)
         cmocka_unit_test(test_samples_refine_follows_a_step),
         cmocka_unit_test(test_samples_interpolate),
         cmocka_unit_test(test_samples_nearest),
+        cmocka_unit_test(test_samples_thin_skips_unsampled),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
