@@ -527,10 +527,10 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
     return got;
 }
 
-/* ---- Packets: four rays, one traversal -----------------------------------
+/* ---- Packets: up to sixteen rays, one traversal ----------------------------
  *
- * sg_hybrid_intersect4 walks the tree once for up to four rays (a 2x2 quad
- * of camera rays). An entry carries, per ray, the node's floor (as a
+ * sg_hybrid_intersect16 walks the tree once for up to sixteen rays (a 4x4
+ * block of camera rays; sg_hybrid_intersect4 is its first four lanes). An entry carries, per ray, the node's floor (as a
  * single ray's entry does) and the mask of the rays that go on into it: a
  * ray is in it only when it entered the node's sphere and every ancestor's,
  * and each of those was opened for it, by the same per-ray rules
@@ -544,7 +544,7 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
  * walk itself (one pop, one sort, one prefetch per node), the bundle's and
  * the triangles' cache lines, and, for rays with one origin and one axis
  * permutation (sg_tri_ray), the leaf's gathered vertices. */
-enum { PW = 4 };
+enum { PW = 16 };
 
 typedef struct pentry {
     float t[PW];    /* per ray: its floor ("Order"); valid for rays in lanes */
@@ -661,7 +661,9 @@ static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned 
     /* Each pop pushes at most W entries and the walk is depth first, so
      * the single ray's bound holds (invariant 3). */
     pentry stack[STACK_CAP];
-    const float root[PW] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    float root[PW];
+    for (int i = 0; i < PW; ++i)
+        root[i] = -INFINITY;
     int sp = push_children4(h, 0, r, bst, root, lanes, stack, c);
     while (sp > 0) {
         const pentry e = stack[--sp];
@@ -687,14 +689,14 @@ static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned 
     }
 }
 
-unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
-                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats)
+unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
+                               sg_hybrid_hit *hits, sg_hybrid_stats *stats)
 {
     tray r[PW];
     best bst[PW];
     counters c = {0};
     unsigned lanes = 0;
-    mask &= 15u;
+    mask &= 0xFFFFu;
     for (unsigned m = mask; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
         miss(&hits[i]);
@@ -724,6 +726,13 @@ unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned
         stats->lod_hits += lod_hits;
     }
     return found;
+}
+
+unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
+                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats)
+{
+    /* lanes outside mask are never read or written */
+    return sg_hybrid_intersect16(h, rays, mask & 15u, fp, hits, stats);
 }
 
 int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats)

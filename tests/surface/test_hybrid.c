@@ -67,6 +67,11 @@
  *                                  BACK_ONLY; partial masks) give each ray
  *                                  its single-ray hit bit for bit, through
  *                                  the hierarchy and through sg_scene.
+ * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
+ *                                  sixteen rays (sg_hybrid_intersect16,
+ *                                  sg_scene_intersect16), with edge and
+ *                                  random masks; rays outside the mask
+ *                                  stay unwritten.
  */
 #include "test_support.h"
 
@@ -1024,11 +1029,12 @@ static void test_hybrid_albedo_is_site_blend(void **state)
 
 /* ---- 16: packets ---------------------------------------------------------- */
 
-/* Up to four rays of a camera at eye looking at look, n x n pixels over a
- * 40-degree view: pixel (x, y) and its neighbours `step` pixels right and
- * down (step 1: a coherent quad; larger: scattered); random: each ray its
- * own eye and direction. */
-static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, sg_ray rays[4])
+/* side x side rays of a camera at eye looking at look, n x n pixels over a
+ * 40-degree view: pixel (x, y) and its neighbours `step` pixels apart
+ * right and down (step 1: a coherent block; larger: scattered); random:
+ * each ray its own eye and direction. */
+static void block_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, int side,
+                       sg_ray *rays)
 {
     enum { N = 64 };
     sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
@@ -1038,10 +1044,11 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
     sg_vec3 up = sg_v3_cross(rt, fw);
     const float th = tanf(20.0f * 3.14159265f / 180.0f);
     int step = kind == 0 ? 1 : 1 + (int)(16.0f * sg_test_rand01(rng));
-    int x = (int)((float)(N - step) * sg_test_rand01(rng)), y = (int)((float)(N - step) * sg_test_rand01(rng));
-    for (int r = 0; r < 4; ++r) {
-        float u = th * (2.0f * ((float)(x + (r & 1) * step) + 0.5f) / N - 1.0f);
-        float v = th * (1.0f - 2.0f * ((float)(y + (r >> 1) * step) + 0.5f) / N);
+    int span = (side - 1) * step;
+    int x = (int)((float)(N - span) * sg_test_rand01(rng)), y = (int)((float)(N - span) * sg_test_rand01(rng));
+    for (int r = 0; r < side * side; ++r) {
+        float u = th * (2.0f * ((float)(x + (r % side) * step) + 0.5f) / N - 1.0f);
+        float v = th * (1.0f - 2.0f * ((float)(y + (r / side) * step) + 0.5f) / N);
         sg_vec3 d = sg_v3_normalize(sg_v3_add(fw, sg_v3_add(sg_v3_scale(rt, u), sg_v3_scale(up, v))));
         rays[r] = (sg_ray){.org = eye, .dir = d, .tmin = 0.0f, .tmax = INFINITY, .flags = flags,
                            .spread = spread * 2.0f * th / N};
@@ -1051,6 +1058,11 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
             rays[r].dir = sg_v3_normalize(sg_v3_sub(to, rays[r].org));
         }
     }
+}
+
+static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, sg_ray rays[4])
+{
+    block_rays(rng, c, R, kind, flags, spread, 2, rays);
 }
 
 /* sg_hybrid_intersect4 and sg_scene_intersect4 give each ray of a packet
@@ -1137,6 +1149,102 @@ static void test_hybrid_intersect4_matches_single(void **state)
         sg_mesh_free(&meshes[mi]);
 }
 
+/* sg_hybrid_intersect16 and sg_scene_intersect16 give each ray of a 4x4
+ * block its single-ray hit, bit for bit, as intersect4_matches_single
+ * checks for quads: coherent, scattered and random blocks; full detail,
+ * LOD at 1 and 4 pixels and mixed within a block; both faces, FRONT_ONLY,
+ * BACK_ONLY; full, partial (a block on the frame's edge) and random
+ * masks; finite tmax, per ray too. Rays outside the mask are not written. */
+static void test_hybrid_intersect16_matches_single(void **state)
+{
+    (void)state;
+    sg_mesh meshes[3] = {fine_sphere(), {0}, {0}};
+    const char *names[3] = {"sphere", "bunny", "dragon"};
+    sg_error err = {0};
+    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
+        fail_msg("bunny: %s", err.message);
+    int count = 2;
+    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
+    if (path && sg_mesh_read(path, &meshes[2], &err) == SG_OK)
+        count = 3;
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const float lods[3] = {0.0f, 1.0f, 4.0f};
+    uint64_t rng = 23;
+    for (int mi = 0; mi < count; ++mi) {
+        sg_hybrid *h = build(&meshes[mi], 2);
+        sg_scene *sc = mesh_scene(&meshes[mi], 1.0f);
+        sg_hybrid_info info;
+        sg_hybrid_get_info(h, &info);
+        sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
+        float R = 0.5f * info.diagonal;
+        size_t checked = 0, hits = 0, lod_hits = 0, partly = 0;
+        for (int q = 0; q < 1500; ++q) {
+            const int kind = q % 3;
+            const uint32_t fl = flags[q / 3 % 3];
+            const float lod = lods[q / 9 % 3];
+            sg_ray rays[16];
+            block_rays(&rng, c, R, kind, fl, lod > 0.0f ? 1.0f : 0.0f, 4, rays);
+            if (q % 7 == 6) /* a finite tmax, one per ray */
+                for (int r = 0; r < 16; ++r)
+                    rays[r].tmax = 2.0f * R * sg_test_rand01(&rng);
+            sg_footprint fp[16];
+            for (int r = 0; r < 16; ++r)
+                fp[r] = (sg_footprint){0.0f, rays[r].spread, q % 11 == 10 ? lods[r % 3] : lod};
+            unsigned mask = 0xFFFFu;
+            if (q % 5 == 3)
+                mask = 0x0777u; /* a block on the frame's right and bottom edges */
+            else if (q % 5 == 4)
+                mask = 1u + (unsigned)(65534.0f * sg_test_rand01(&rng));
+            sg_hybrid_hit sixteen[16], one;
+            sg_hit ssix[16], sone;
+            for (int r = 0; r < 16; ++r) {
+                sixteen[r].t = ssix[r].t = -1.0f; /* must stay for rays outside mask */
+                ssix[r].splat = 12345u;
+            }
+            const sg_footprint *fpp = lod > 0.0f || q % 11 == 10 ? fp : NULL;
+            unsigned got = sg_hybrid_intersect16(h, rays, mask, fpp, sixteen, NULL);
+            unsigned sgot = sg_scene_intersect16(sc, rays, mask, ssix, NULL);
+            unsigned alone = 0;
+            for (int r = 0; r < 16; ++r) {
+                if (!(mask >> r & 1u)) {
+                    if (got >> r & 1u || sgot >> r & 1u || sixteen[r].t != -1.0f || ssix[r].t != -1.0f ||
+                        ssix[r].splat != 12345u)
+                        fail_msg("%s, block %d: ray %d outside mask %#x was written", names[mi], q, r, mask);
+                    continue;
+                }
+                int hs = sg_hybrid_intersect(h, &rays[r], fpp ? &fp[r] : NULL, &one, NULL);
+                alone |= (unsigned)hs << r;
+                ++checked;
+                hits += (size_t)hs;
+                lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
+                if (hs != (int)(got >> r & 1u) || (hs && !same_hit(&one, &sixteen[r])))
+                    fail_msg("%s, block %d (kind %d, flags %u, lod %g, mask %#x), ray %d: alone %d (t %.9g, "
+                             "triangle %u, node %u), in sixteen %u (t %.9g, triangle %u, node %u)",
+                             names[mi], q, kind, fl, (double)lod, mask, r, hs, (double)one.t, one.triangle,
+                             one.node, got >> r & 1u, (double)sixteen[r].t, sixteen[r].triangle, sixteen[r].node);
+                int ss = sg_scene_intersect(sc, &rays[r], &sone, NULL);
+                if (ss != (int)(sgot >> r & 1u) ||
+                    (ss && (memcmp(&sone.t, &ssix[r].t, sizeof sone.t) || memcmp(&sone.p, &ssix[r].p, sizeof sone.p) ||
+                            memcmp(&sone.n, &ssix[r].n, sizeof sone.n) || sone.splat != ssix[r].splat ||
+                            sone.leaf != ssix[r].leaf)) ||
+                    (!ss && ssix[r].splat != SG_INVALID_ID))
+                    fail_msg("%s, block %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, "
+                             "splat %u), in sixteen %u (t %.9g, splat %u)",
+                             names[mi], q, kind, fl, r, ss, (double)sone.t, sone.splat, sgot >> r & 1u,
+                             (double)ssix[r].t, ssix[r].splat);
+            }
+            partly += alone != 0 && alone != mask;
+        }
+        print_message("%s: %zu rays in blocks of 16, %zu hits (%zu LOD), %zu blocks partly hit\n", names[mi],
+                      checked, hits, lod_hits, partly);
+        assert_true(hits > checked / 5 && hits < checked * 9 / 10 && lod_hits > 100 && partly > 100);
+        sg_scene_destroy(sc);
+        sg_hybrid_destroy(h);
+    }
+    for (int mi = 0; mi < count; ++mi)
+        sg_mesh_free(&meshes[mi]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1157,6 +1265,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_sites_threads_identical),
         cmocka_unit_test(test_hybrid_albedo_is_site_blend),
         cmocka_unit_test(test_hybrid_intersect4_matches_single),
+        cmocka_unit_test(test_hybrid_intersect16_matches_single),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
