@@ -553,11 +553,19 @@ typedef struct pentry {
     uint32_t lanes; /* rays that go on into the node                    */
 } pentry;
 
+/* The packet's rays as SIMD lanes (sg_bundle_test16 tests one node against
+ * all of them), and each ray's best t beside its best (kept in step). */
+typedef struct psoa {
+    sg_bundle_ray16 br;         /* lanes outside the packet: copies of one in it */
+    _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
+    unsigned cull;              /* rays with r[i].cull                          */
+} psoa;
+
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
  * decides it (disk hit, skipped, or opened). Returns how many were
  * written to out. */
-static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, const float *floor,
+static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
                           unsigned lanes, pentry *out, counters *c)
 {
     const sg_stree_bundle *B = &h->tree.bundles[cb];
@@ -578,6 +586,7 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
                 continue; /* a disk found in this bundle is nearer */
             if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[i][l], c) == NODE_OPEN)
                 open[i] |= 1u << l;
+            P->bt[i] = bst[i].t;
         }
         any |= open[i];
     }
@@ -620,6 +629,84 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
     return n;
 }
 
+#if SG_BUNDLE_SIMD16
+/* push_children4 with the sphere tests across the rays: per child, one
+ * sg_bundle_test16 gives the rays that enter it, their floors and which of
+ * them see it point-sized, so the child's lanes and key come straight from
+ * the masks. Each ray's point decisions are node_point's, made for its
+ * children in lane order as alone; a disk hit lowers the ray's far limit
+ * for the later children's tests, which then drop only children that
+ * begin beyond its best (pruned at their pop otherwise): the same hits. */
+static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
+                           unsigned lanes, pentry *out, counters *c)
+{
+    const sg_stree_bundle *B = &h->tree.bundles[cb];
+    _Alignas(64) float ft[W][PW]; /* per child, per ray: its floor */
+    float key[W];
+    unsigned go[W], any = 0;
+    const sg_v16 fl = sg_v16_load(floor);
+    c->spheres += (uint64_t)W * (uint64_t)__builtin_popcount(lanes);
+    for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l) { /* children fill the lanes from 0 */
+        _Alignas(64) float tin[PW];
+        unsigned lod;
+        const unsigned mask = sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod) & lanes;
+        if (!mask)
+            continue;
+        const sg_v16 f = sg_v16_max(sg_v16_load(tin), fl); /* tin > floor ? tin : floor */
+        sg_v16_store(ft[l], f);
+        unsigned open = mask & ~lod;
+        for (unsigned ml = mask & lod; ml; ml &= ml - 1) {
+            const int i = __builtin_ctz(ml);
+            if (!(ft[l][i] <= bst[i].t))
+                continue; /* a disk found in this bundle is nearer */
+            if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[l][i], c) == NODE_OPEN)
+                open |= 1u << i;
+            P->bt[i] = bst[i].t;
+        }
+        if (!open)
+            continue;
+        go[l] = open;
+        key[l] = sg_v16_min_lanes(f, open);
+        any |= 1u << l;
+    }
+    /* Farthest first (popped last); equal keys: the lower lane popped first. */
+    int kids[W], n = 0;
+    for (unsigned ml = any; ml; ml &= ml - 1) {
+        const int l = __builtin_ctz(ml);
+        int j = n++;
+        while (j > 0 && key[kids[j - 1]] < key[l]) {
+            kids[j] = kids[j - 1];
+            --j;
+        }
+        kids[j] = l;
+    }
+    for (int j = 0; j < n; ++j) {
+        const int l = kids[j];
+        pentry *e = &out[j];
+        memcpy(e->t, ft[l], sizeof e->t);
+        e->key = key[l];
+        e->id = cb * (uint32_t)W + (uint32_t)l;
+        e->lanes = go[l];
+        prefetch_visit(h, B->child[l]);
+    }
+    return n;
+}
+#endif
+
+/* Packets of a few rays test a bundle ray by ray (8 nodes a test), fuller
+ * ones node by node across the rays (16 rays a test). */
+enum { SPARSE_LANES = 4 };
+
+static inline int push_packet(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
+                              unsigned lanes, pentry *out, counters *c)
+{
+#if SG_BUNDLE_SIMD16
+    if (__builtin_popcount(lanes) > SPARSE_LANES)
+        return push_children16(h, cb, r, bst, P, floor, lanes, out, c);
+#endif
+    return push_children4(h, cb, r, bst, P, floor, lanes, out, c);
+}
+
 /* 1 when rays a and b gather a triangle's vertices alike (sg_tri4_gather
  * reads the origin and the axis permutation only). */
 static int same_gather(const sg_tri_ray *a, const sg_tri_ray *b)
@@ -656,7 +743,7 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
     }
 }
 
-static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned lanes, counters *c)
+static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, unsigned lanes, counters *c)
 {
     /* Each pop pushes at most W entries and the walk is depth first, so
      * the single ray's bound holds (invariant 3). */
@@ -664,28 +751,36 @@ static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned 
     float root[PW];
     for (int i = 0; i < PW; ++i)
         root[i] = -INFINITY;
-    int sp = push_children4(h, 0, r, bst, root, lanes, stack, c);
+    int sp = push_packet(h, 0, r, bst, P, root, lanes, stack, c);
     while (sp > 0) {
         const pentry e = stack[--sp];
         const uint32_t k = e.id;
-        unsigned go = 0;
-        for (unsigned m = e.lanes; m; m &= m - 1) {
+        /* the rays whose floor is not beyond their best (e.t[i] > bst[i].t: pruned) */
+        unsigned go = e.lanes;
+#if SG_BUNDLE_SIMD16
+        go &= ~sg_v16_gt(sg_v16_load(e.t), sg_v16_load(P->bt));
+#else
+        for (unsigned m = e.lanes; m; m &= m - 1)
+            if (e.t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
+                go &= ~(1u << __builtin_ctz(m));
+#endif
+        /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
+        for (unsigned m = go & P->cull; m; m &= m - 1) {
             const int i = __builtin_ctz(m);
-            if (e.t[i] > bst[i].t)
-                continue;
-            /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
-            if (r[i].cull && node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
-                continue;
-            go |= 1u << i;
+            if (node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
+                go &= ~(1u << i);
         }
         if (!go)
             continue;
         c->pops++;
         const uint32_t word = h->tree.bundles[k / W].child[k % W];
-        if (sg_stree_is_leaf(word))
+        if (sg_stree_is_leaf(word)) {
             test_leaf4(h, word, r, bst, go, c);
-        else
-            sp += push_children4(h, word, r, bst, e.t, go, stack + sp, c);
+            for (unsigned m = go; m; m &= m - 1)
+                P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
+        } else {
+            sp += push_packet(h, word, r, bst, P, e.t, go, stack + sp, c);
+        }
     }
 }
 
@@ -705,8 +800,26 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
         bst[i] = (best){.t = rays[i].tmax, .key = UINT64_MAX};
         lanes |= 1u << i;
     }
-    if (lanes)
-        trace_stack4(h, r, bst, lanes, &c);
+    if (lanes) {
+        psoa P;
+        P.cull = 0;
+        const int f = __builtin_ctz(lanes);
+        for (int i = 0; i < PW; ++i) {
+            const tray *ri = &r[lanes >> i & 1u ? i : f]; /* a ray outside: a copy, so lanes stay finite */
+            P.br.ox[i] = ri->br.o[0];
+            P.br.oy[i] = ri->br.o[1];
+            P.br.oz[i] = ri->br.o[2];
+            P.br.dx[i] = ri->br.d[0];
+            P.br.dy[i] = ri->br.d[1];
+            P.br.dz[i] = ri->br.d[2];
+            P.br.tmin[i] = ri->br.tmin;
+            P.br.lod0[i] = ri->br.lod0;
+            P.br.lod1[i] = ri->br.lod1;
+            P.bt[i] = bst[lanes >> i & 1u ? i : f].t;
+            P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
+        }
+        trace_packet(h, r, bst, &P, lanes, &c);
+    }
     unsigned found = 0, lod_hits = 0;
     for (unsigned m = lanes; m; m &= m - 1) {
         const int i = __builtin_ctz(m);

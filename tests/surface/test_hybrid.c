@@ -67,6 +67,8 @@
  *                                  BACK_ONLY; partial masks) give each ray
  *                                  its single-ray hit bit for bit, through
  *                                  the hierarchy and through sg_scene.
+ *     (kernels_agree also checks sg_bundle_test16, a node against 16
+ *     rays, against the single ray's scalar test, ray by ray.)
  * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
  *                                  sixteen rays (sg_hybrid_intersect16,
  *                                  sg_scene_intersect16), with edge and
@@ -709,6 +711,56 @@ static void test_hybrid_kernels_agree(void **state)
     if (bdiff)
         fail_msg("bundles: %zu tests differ between SIMD and scalar", bdiff);
     assert_true(entered > 100 && points > 10);
+
+    /* One node against sixteen rays (sg_bundle_test16) is, per ray, the
+     * single ray's test of that lane: rays from one eye and from many,
+     * with and without footprints, finite and infinite far limits. */
+    size_t rdiff = 0, rentered = 0, rpoints = 0;
+    for (size_t bi = 0; bi < h->tree.bundle_count; ++bi) {
+        const sg_stree_bundle *B = &h->tree.bundles[bi];
+        sg_bundle_ray16 r16;
+        float tfar[16];
+        sg_bundle_ray one[16];
+        sg_vec3 eye = sg_v3_scale(random_dir(&rng), 3.0f);
+        for (int i = 0; i < 16; ++i) {
+            int l = (int)(bi + (size_t)i) % SG_STREE_WIDTH;
+            sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
+            sg_vec3 o = bi % 2 ? eye : sg_v3_scale(random_dir(&rng), 3.0f);
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(random_dir(&rng), 0.1f)));
+            one[i] = (sg_bundle_ray){.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f,
+                                     .lod0 = i % 2 ? 0.01f : 0.0f, .lod1 = i % 2 ? 0.05f : 0.0f};
+            r16.ox[i] = o.x, r16.oy[i] = o.y, r16.oz[i] = o.z;
+            r16.dx[i] = d.x, r16.dy[i] = d.y, r16.dz[i] = d.z;
+            r16.tmin[i] = 0.0f, r16.lod0[i] = one[i].lod0, r16.lod1[i] = one[i].lod1;
+            tfar[i] = i % 3 ? INFINITY : 3.0f * sg_test_rand01(&rng);
+        }
+        for (int l = 0; l < SG_STREE_WIDTH; ++l) {
+            float ta[16], tb[16], tc[SG_STREE_WIDTH];
+            unsigned la, lb;
+            unsigned ma = sg_bundle_test16(B, l, &r16, tfar, ta, &la);
+            unsigned mb = sg_bundle_test16_scalar(B, l, &r16, tfar, tb, &lb);
+            for (int i = 0; i < 16; ++i) {
+                unsigned lc;
+                unsigned mc = sg_bundle_test_scalar(B, &one[i], tfar[i], tc, &lc);
+                int hit = (int)(mc >> l & 1u);
+                if ((int)(ma >> i & 1u) != hit || (int)(mb >> i & 1u) != hit ||
+                    (hit && ((la >> i & 1u) != (lc >> l & 1u) || (lb >> i & 1u) != (lc >> l & 1u) ||
+                             memcmp(&ta[i], &tc[l], 4) != 0 || memcmp(&tb[i], &tc[l], 4) != 0))) {
+                    if (!rdiff)
+                        print_message("bundle %zu lane %d ray %d: entered %u / %u / %d, tin %.9g / %.9g / %.9g\n", bi,
+                                      l, i, ma >> i & 1u, mb >> i & 1u, hit, (double)ta[i], (double)tb[i],
+                                      (double)tc[l]);
+                    ++rdiff;
+                }
+                rentered += (size_t)hit;
+                rpoints += (size_t)(hit && (lc >> l & 1u));
+            }
+        }
+    }
+    print_message("bundles x 16 rays: %zu entered, %zu point-sized\n", rentered, rpoints);
+    if (rdiff)
+        fail_msg("bundles x 16 rays: %zu ray-node tests differ from the single ray's", rdiff);
+    assert_true(rentered > 1000 && rpoints > 10);
     sg_hybrid_destroy(h);
     sg_mesh_free(&m);
 }
