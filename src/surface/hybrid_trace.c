@@ -215,29 +215,30 @@ static sg_vec3 tri_normal(const sg_hybrid *h, uint32_t i)
  * resolve as one at a time would; returns 1 when one became the best.
  * Shared by the single-ray and the packet leaf tests (always inlined:
  * the single-ray loop compiles as it did before packets). */
+static inline __attribute__((always_inline)) int take_hit(const sg_hybrid *h, const tray *r, float t, float b1,
+                                                          float b2, int front, uint32_t i, best *b)
+{
+    if (front ? !r->accept_front : !r->accept_back)
+        return 0;
+    if (!better(t, i, b))
+        return 0;
+    if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
+        return 0;
+    b->t = t;
+    b->key = i;
+    b->b1 = b1;
+    b->b2 = b2;
+    b->front = front;
+    return 1;
+}
+
 static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const sg_tri4_hit *th,
                                                            unsigned mask, uint32_t g, best *b)
 {
     int found = 0;
-    for (uint32_t l = 0; mask; ++l, mask >>= 1) {
-        if (!(mask & 1u))
-            continue;
-        const uint32_t i = g + l;
-        const int front = (int)(th->front >> l & 1u);
-        const float t = th->t[l];
-        if (front ? !r->accept_front : !r->accept_back)
-            continue;
-        if (!better(t, i, b))
-            continue;
-        if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
-            continue;
-        b->t = t;
-        b->key = i;
-        b->b1 = th->b1[l];
-        b->b2 = th->b2[l];
-        b->front = front;
-        found = 1;
-    }
+    for (uint32_t l = 0; mask; ++l, mask >>= 1)
+        if (mask & 1u)
+            found |= take_hit(h, r, th->t[l], th->b1[l], th->b2[l], (int)(th->front >> l & 1u), g + l, b);
     return found;
 }
 
@@ -558,6 +559,7 @@ typedef struct pentry {
 typedef struct psoa {
     sg_bundle_ray16 br;         /* lanes outside the packet: copies of one in it */
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
+    sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
 } psoa;
 
@@ -743,6 +745,61 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
     }
 }
 
+#if SG_V16_SIMD
+/* test_leaf4 across the rays: the rays that gather like the packet's first
+ * (one origin and axis order: camera rays) test each triangle in one
+ * sg_tri_intersect16, against their own bests, and take its crossings in
+ * leaf order as test_leaf does (each ray's triangles in the same order,
+ * each crossing kept or not by the same rule: the same hit). A ray that
+ * gathers otherwise goes through test_leaf4. */
+static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, psoa *P, unsigned lanes,
+                        counters *c)
+{
+    const int f = __builtin_ctz(lanes);
+    unsigned cls = 0;
+    for (unsigned m = lanes; m; m &= m - 1)
+        if (same_gather(&r[f].tr, &r[__builtin_ctz(m)].tr))
+            cls |= 1u << __builtin_ctz(m);
+    if (__builtin_popcount(cls) <= SPARSE_LANES)
+        cls = 0;
+    if (lanes & ~cls) {
+        test_leaf4(h, word, r, bst, lanes & ~cls, c);
+        for (unsigned m = lanes & ~cls; m; m &= m - 1)
+            P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
+    }
+    if (!cls)
+        return;
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    c->triangles += count * (uint64_t)__builtin_popcount(cls);
+    const sg_tri_ray *t0 = &r[f].tr;
+    const int k[3] = {t0->kx, t0->ky, t0->kz};
+    for (uint32_t j = first; j < first + count; ++j) {
+        const uint32_t *v = h->tri + 3 * (size_t)j;
+        const float *p0 = h->pos + 3 * (size_t)v[0], *p1 = h->pos + 3 * (size_t)v[1], *p2 = h->pos + 3 * (size_t)v[2];
+        float a[3], b[3], cc[3]; /* as sg_tri4_gather */
+        for (int q = 0; q < 3; ++q) {
+            a[q] = p0[k[q]] - t0->org[k[q]];
+            b[q] = p1[k[q]] - t0->org[k[q]];
+            cc[q] = p2[k[q]] - t0->org[k[q]];
+        }
+        sg_tri16_hit th;
+        unsigned e0;
+        const unsigned hm = sg_tri_intersect16(&P->sh, a, b, cc, cls, P->br.tmin, P->bt, &th, &e0);
+        for (unsigned m = hm | e0; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            if (e0 >> i & 1u) { /* an edge function exactly 0: the scalar test's double fallback */
+                sg_tri_hit one;
+                if (sg_tri_intersect(&r[i].tr, p0, p1, p2, r[i].tmin, bst[i].t, &one) &&
+                    take_hit(h, &r[i], one.t, one.b1, one.b2, one.front, j, &bst[i]))
+                    P->bt[i] = bst[i].t;
+            } else if (take_hit(h, &r[i], th.t[i], th.b1[i], th.b2[i], (int)(th.front >> i & 1u), j, &bst[i])) {
+                P->bt[i] = bst[i].t;
+            }
+        }
+    }
+}
+#endif
+
 static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, unsigned lanes, counters *c)
 {
     /* Each pop pushes at most W entries and the walk is depth first, so
@@ -775,9 +832,13 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
         c->pops++;
         const uint32_t word = h->tree.bundles[k / W].child[k % W];
         if (sg_stree_is_leaf(word)) {
+#if SG_V16_SIMD
+            test_leaf16(h, word, r, bst, P, go, c);
+#else
             test_leaf4(h, word, r, bst, go, c);
             for (unsigned m = go; m; m &= m - 1)
                 P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
+#endif
         } else {
             sp += push_packet(h, word, r, bst, P, e.t, go, stack + sp, c);
         }
@@ -816,6 +877,9 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.br.lod0[i] = ri->br.lod0;
             P.br.lod1[i] = ri->br.lod1;
             P.bt[i] = bst[lanes >> i & 1u ? i : f].t;
+            P.sh.sx[i] = ri->tr.sx;
+            P.sh.sy[i] = ri->tr.sy;
+            P.sh.sz[i] = ri->tr.sz;
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
         }
         trace_packet(h, r, bst, &P, lanes, &c);

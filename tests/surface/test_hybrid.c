@@ -680,6 +680,68 @@ static void test_hybrid_kernels_agree(void **state)
         fail_msg("triangles: %zu of 20000 groups of 4 differ between SIMD and scalar", differ);
     assert_true(hits > 1000); /* the comparison saw hits, not only misses */
 
+#if SG_V16_SIMD
+    /* One triangle against sixteen rays of one origin and axis order
+     * (sg_tri_intersect16), each lane against sg_tri_intersect: random
+     * triangles, and integer ones met by axis rays (edge functions exactly
+     * 0: reported in exact0, never decided by the kernel); per-ray tmax. */
+    size_t tdiff = 0, thits = 0, texact = 0;
+    for (int n = 0; n < 5000; ++n) {
+        float v[3][3];
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a)
+                v[k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
+                                     : 4.0f * sg_test_rand01(&rng) - 2.0f;
+        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
+        sg_tri_ray tr[16];
+        sg_tri_shear16 sh;
+        float tmin[16], tmax[16];
+        unsigned valid = 0;
+        for (int i = 0; i < 16; ++i) {
+            sg_vec3 d = n % 4 == 0 && i < 4 ? sg_v3(0, 0, -1)
+                                           : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
+                                                                   sg_test_rand01(&rng) - 0.5f, -1));
+            tr[i] = sg_tri_ray_prepare(o, d);
+            sh.sx[i] = tr[i].sx, sh.sy[i] = tr[i].sy, sh.sz[i] = tr[i].sz;
+            tmin[i] = 0.0f;
+            tmax[i] = i % 5 == 4 ? 6.0f * sg_test_rand01(&rng) : INFINITY;
+            valid |= (unsigned)(tr[i].kx == tr[0].kx && tr[i].ky == tr[0].ky && tr[i].kz == tr[0].kz) << i;
+        }
+        const int k[3] = {tr[0].kx, tr[0].ky, tr[0].kz};
+        float a[3], b[3], c[3];
+        for (int q = 0; q < 3; ++q) {
+            a[q] = v[0][k[q]] - tr[0].org[k[q]];
+            b[q] = v[1][k[q]] - tr[0].org[k[q]];
+            c[q] = v[2][k[q]] - tr[0].org[k[q]];
+        }
+        sg_tri16_hit th;
+        unsigned e0;
+        unsigned m16 = sg_tri_intersect16(&sh, a, b, c, valid, tmin, tmax, &th, &e0);
+        texact += (size_t)__builtin_popcount(e0);
+        for (int i = 0; i < 16; ++i) {
+            if (!(valid >> i & 1u) || e0 >> i & 1u) {
+                tdiff += (m16 >> i & 1u) != 0;
+                continue;
+            }
+            sg_tri_hit one;
+            int hit = sg_tri_intersect(&tr[i], v[0], v[1], v[2], tmin[i], tmax[i], &one);
+            thits += (size_t)hit;
+            if (hit != (int)(m16 >> i & 1u) ||
+                (hit && (memcmp(&one.t, &th.t[i], 4) || memcmp(&one.b1, &th.b1[i], 4) ||
+                         memcmp(&one.b2, &th.b2[i], 4) || one.front != (int)(th.front >> i & 1u)))) {
+                if (!tdiff)
+                    print_message("triangle %d ray %d: alone %d t %.9g, in sixteen %u t %.9g\n", n, i, hit,
+                                  (double)one.t, m16 >> i & 1u, (double)th.t[i]);
+                ++tdiff;
+            }
+        }
+    }
+    print_message("triangles x 16 rays: %zu hits, %zu lanes left to the exact fallback\n", thits, texact);
+    if (tdiff)
+        fail_msg("triangles x 16 rays: %zu lanes differ from sg_tri_intersect", tdiff);
+    assert_true(thits > 1000 && texact > 100);
+#endif
+
     /* Bundles of a real hierarchy, rays with and without a footprint. */
     sg_mesh m = sphere_mesh(32, 64);
     sg_hybrid *h = build(&m, 0);
