@@ -771,6 +771,12 @@ static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *
         return;
     const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
     c->triangles += count * (uint64_t)__builtin_popcount(cls);
+#ifndef SG_HYBRID_NO_PREFETCH
+    /* every vertex of the leaf at once: their misses overlap instead of
+     * each triangle's waiting on its own */
+    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
+        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
+#endif
     const sg_tri_ray *t0 = &r[f].tr;
     const int k[3] = {t0->kx, t0->ky, t0->kz};
     for (uint32_t j = first; j < first + count; ++j) {
@@ -885,6 +891,20 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
         trace_packet(h, r, bst, &P, lanes, &c);
     }
     unsigned found = 0, lod_hits = 0;
+#ifndef SG_HYBRID_NO_PREFETCH
+    /* The hits' vertex normals and ids (write_hit) are cold: ask for all
+     * of them before the first is read. */
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const best *b = &bst[__builtin_ctz(m)];
+        if (b->key >> 32)
+            continue; /* a miss (all ones) or a node */
+        const uint32_t *v = h->tri + 3 * (size_t)b->key;
+        __builtin_prefetch(&h->tri_id[b->key]);
+        if (h->vnormal)
+            for (int q = 0; q < 3; ++q)
+                __builtin_prefetch(&h->vnormal[v[q]]);
+    }
+#endif
     for (unsigned m = lanes; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
         if (write_hit(h, &rays[i], &bst[i], &hits[i])) {
