@@ -58,10 +58,13 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
                     mask |= 1u << q;
                 }
                 unsigned hit = sg_world_intersect16(w, rays, mask, h, NULL);
+                sg_vec3 wo[16], Lh[16];
+                for (unsigned m = hit; m; m &= m - 1)
+                    wo[__builtin_ctz(m)] = sg_v3_scale(rays[__builtin_ctz(m)].dir, -1.0f);
+                sg_bake_lookup16(b, w, h, wo, hit, Lh);
                 for (unsigned m = mask; m; m &= m - 1) {
                     int q = __builtin_ctz(m);
-                    sg_vec3 L = hit >> q & 1u ? sg_bake_lookup(b, w, &h[q], sg_v3_scale(rays[q].dir, -1.0f))
-                                              : sg_envmap_eval(env, rays[q].dir);
+                    sg_vec3 L = hit >> q & 1u ? Lh[q] : sg_envmap_eval(env, rays[q].dir);
                     size_t at = (size_t)(y + (q >> 2)) * (size_t)d.width + (size_t)(x + (q & 3));
                     float *px = img.data + 3 * at;
                     img.alpha[at] = (float)(hit >> q & 1u);
