@@ -561,7 +561,41 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
+    int cone;                   /* 1: the rays leave one origin within a cone   */
+    float co[3], ca[3];         /* its apex (the origin) and unit axis          */
+    float csin, ccos;           /* sine and cosine of its half-angle, widened   */
 } psoa;
+
+/* The children of bundle B that some ray of the packet may enter: a
+ * sphere that does not meet the packet's cone is entered by none of its
+ * rays (Eberly's sphere-cone test, the radius and the cone widened far
+ * beyond the rounding of either test), so its 16-ray test is skipped; it
+ * would have come out 0 for every ray. Any ray order: all children. */
+static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
+{
+    unsigned kids = 0;
+    if (!P->cone) {
+        for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
+            kids |= 1u << l;
+        return kids;
+    }
+    const float s2 = P->csin * P->csin, c2 = P->ccos * P->ccos, back = 1.0f / P->csin;
+    for (int l = 0; l < W; ++l) {
+        const float vx = B->cx[l] - P->co[0], vy = B->cy[l] - P->co[1], vz = B->cz[l] - P->co[2];
+        const float r = B->r[l] * 1.001f + 1e-4f * (fabsf(vx) + fabsf(vy) + fabsf(vz));
+        /* apex moved back along the axis by r / sin: the cone of centres */
+        const float ux = vx + r * back * P->ca[0], uy = vy + r * back * P->ca[1], uz = vz + r * back * P->ca[2];
+        const float e = ux * P->ca[0] + uy * P->ca[1] + uz * P->ca[2];
+        const float u2 = ux * ux + uy * uy + uz * uz;
+        const float f = -(vx * P->ca[0] + vy * P->ca[1] + vz * P->ca[2]);
+        const float v2 = vx * vx + vy * vy + vz * vz;
+        /* in the cone of centres, and not behind the apex beyond r; NaN (an
+         * empty lane) fails */
+        const int in = e > 0.0f && e * e >= u2 * c2 && (!(f > 0.0f && f * f >= v2 * s2) || v2 <= r * r);
+        kids |= (unsigned)in << l;
+    }
+    return kids;
+}
 
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
@@ -648,7 +682,8 @@ static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best 
     unsigned go[W], any = 0;
     const sg_v16 fl = sg_v16_load(floor);
     c->spheres += (uint64_t)W * (uint64_t)__builtin_popcount(lanes);
-    for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l) { /* children fill the lanes from 0 */
+    for (unsigned kids = cone_children(B, P); kids; kids &= kids - 1) {
+        const int l = __builtin_ctz(kids);
         _Alignas(64) float tin[PW];
         unsigned lod;
         const unsigned mask = sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod) & lanes;
@@ -855,6 +890,43 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
     }
 }
 
+/* The packet's cone (psoa), when its rays leave one origin: the axis is
+ * their mean direction and the half-angle the widest ray's, in double,
+ * widened by 1e-3 radians. */
+static void packet_cone(const tray *r, unsigned lanes, psoa *P)
+{
+    const int f = __builtin_ctz(lanes);
+    double a[3] = {0.0, 0.0, 0.0};
+    P->cone = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const tray *ri = &r[__builtin_ctz(m)];
+        if (memcmp(ri->o, r[f].o, sizeof ri->o) != 0)
+            return;
+        for (int q = 0; q < 3; ++q)
+            a[q] += ri->d[q];
+    }
+    const double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (!(len > 0.0))
+        return;
+    double cmin = 1.0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const tray *ri = &r[__builtin_ctz(m)];
+        const double dl = sqrt((double)ri->d[0] * ri->d[0] + (double)ri->d[1] * ri->d[1] + (double)ri->d[2] * ri->d[2]);
+        const double c = (a[0] * ri->d[0] + a[1] * ri->d[1] + a[2] * ri->d[2]) / (len * dl);
+        cmin = c < cmin ? c : cmin;
+    }
+    const double th = acos(cmin > 1.0 ? 1.0 : cmin) + 1e-3;
+    if (!(th < 1.0)) /* a wide packet: the test would reject little */
+        return;
+    for (int q = 0; q < 3; ++q) {
+        P->co[q] = r[f].o[q];
+        P->ca[q] = (float)(a[q] / len);
+    }
+    P->csin = (float)sin(th);
+    P->ccos = (float)cos(th);
+    P->cone = 1;
+}
+
 unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
                                sg_hybrid_hit *hits, sg_hybrid_stats *stats)
 {
@@ -892,6 +964,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.sh.sz[i] = ri->tr.sz;
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
         }
+        packet_cone(r, lanes, &P);
         trace_packet(h, r, bst, &P, lanes, &c);
     }
     unsigned found = 0, lod_hits = 0;
