@@ -892,7 +892,7 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
 
 /* The packet's cone (psoa), when its rays leave one origin: the axis is
  * their mean direction and the half-angle the widest ray's, in double,
- * widened by 1e-3 radians. */
+ * widened by 1e-3 radians (far beyond the rounding to float). */
 static void packet_cone(const tray *r, unsigned lanes, psoa *P)
 {
     const int f = __builtin_ctz(lanes);
@@ -915,15 +915,19 @@ static void packet_cone(const tray *r, unsigned lanes, psoa *P)
         const double c = (a[0] * ri->d[0] + a[1] * ri->d[1] + a[2] * ri->d[2]) / (len * dl);
         cmin = c < cmin ? c : cmin;
     }
-    const double th = acos(cmin > 1.0 ? 1.0 : cmin) + 1e-3;
-    if (!(th < 1.0)) /* a wide packet: the test would reject little */
+    /* the half-angle plus 1e-3 radians, by the angle-sum identities (no
+     * acos, sin, cos a packet) */
+    const double c0 = cmin > 1.0 ? 1.0 : cmin, s0 = sqrt(1.0 - c0 * c0);
+    const double cd = 0.9999995000000417, sd = 9.999998333333417e-4; /* cos, sin of 1e-3 */
+    const double cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
+    if (!(cw > 0.55)) /* wider than about 1 radian: the test would reject little */
         return;
     for (int q = 0; q < 3; ++q) {
         P->co[q] = r[f].o[q];
         P->ca[q] = (float)(a[q] / len);
     }
-    P->csin = (float)sin(th);
-    P->ccos = (float)cos(th);
+    P->csin = (float)sw;
+    P->ccos = (float)cw;
     P->cone = 1;
 }
 
