@@ -60,9 +60,10 @@
  *     entries (sphere_tree.h invariant 3); the heap holds at most
  *     HEAP_CAP and a ray that would need more is traced again with the
  *     stack (counted in heap_overflows; same hit by invariant 2);
- *  4. each ray of a packet (sg_hybrid_intersect4, "Packets" below) gets
- *     its single-ray hit bit for bit (by invariant 2; test_hybrid
- *     intersect4_matches_single).
+ *  4. each ray of a packet (sg_hybrid_intersect16 and its first four
+ *     lanes sg_hybrid_intersect4, "Packets" below) gets its single-ray hit
+ *     bit for bit (by invariant 2; test_hybrid intersect4_matches_single,
+ *     intersect16_matches_single).
  */
 #include <float.h>
 #include <math.h>
@@ -540,10 +541,14 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
  * pruning (the ray's floor beyond its own best) drops only crossings that
  * cannot win: by invariant 2 each ray gets its single-ray hit, bit for bit,
  * whatever order the packet takes. The order is nearest first by the least
- * floor of the entry's rays. Sphere and triangle tests run per ray with
- * the single-ray kernels on the ray's own best; what the rays share is the
- * walk itself (one pop, one sort, one prefetch per node), the bundle's and
- * the triangles' cache lines, and, for rays with one origin and one axis
+ * floor of the entry's rays. Sphere and triangle tests run on each ray's
+ * own best with the single ray's operations: for a few rays, ray by ray
+ * with the single-ray kernels; for more (SPARSE_LANES), node by node and
+ * triangle by triangle across the rays (sg_bundle_test16,
+ * sg_tri_intersect16), after a cone test that skips the children no ray
+ * of a one-origin packet can enter. What the rays share is the walk itself
+ * (one pop, one sort, one prefetch per node), the bundle's and the
+ * triangles' cache lines, and, for rays with one origin and one axis
  * permutation (sg_tri_ray), the leaf's gathered vertices. */
 enum { PW = 16 };
 
