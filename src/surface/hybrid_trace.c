@@ -571,6 +571,7 @@ typedef struct psoa {
     float csin, ccos;           /* sine and cosine of its half-angle, widened   */
 } psoa;
 
+#if SG_BUNDLE_SIMD16
 /* The children of bundle B that some ray of the packet may enter: a
  * sphere that does not meet the packet's cone is entered by none of its
  * rays (Eberly's sphere-cone test, the radius and the cone widened far
@@ -601,6 +602,7 @@ static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
     }
     return kids;
 }
+#endif
 
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
@@ -898,6 +900,7 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
 /* The packet's cone (psoa), when its rays leave one origin: the axis is
  * their mean direction and the half-angle the widest ray's, in double,
  * widened by 1e-3 radians (far beyond the rounding to float). */
+#if SG_BUNDLE_SIMD16
 static void packet_cone(const tray *r, unsigned lanes, psoa *P)
 {
     const int f = __builtin_ctz(lanes);
@@ -935,6 +938,7 @@ static void packet_cone(const tray *r, unsigned lanes, psoa *P)
     P->ccos = (float)cw;
     P->cone = 1;
 }
+#endif
 
 unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
                                sg_hybrid_hit *hits, sg_hybrid_stats *stats)
@@ -973,7 +977,9 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.sh.sz[i] = ri->tr.sz;
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
         }
+#if SG_BUNDLE_SIMD16
         packet_cone(r, lanes, &P);
+#endif
         trace_packet(h, r, bst, &P, lanes, &c);
     }
     unsigned found = 0, lod_hits = 0;
