@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "accel/sphere_tree.h"
+#include "math/v16.h"
 
 #if defined(__AVX2__) && SG_STREE_WIDTH == 8
 #include <immintrin.h>
@@ -61,37 +62,52 @@ typedef struct sg_bundle_ray {
  * tin[l] for every lane; *lod the mask of point-sized lanes. min and max
  * are written as the SIMD instructions compute them (the second operand
  * when a comparison fails), so NaN gives the same lane results. */
+/* Lane l of B against one ray: 1 when it enters it in [tmin, tfar];
+ * *tin its entry, *lod 1 when it is point-sized. The scalar formula, shared
+ * by both scalar references. */
+static inline unsigned sg_bundle__lane(const sg_stree_bundle *B, int l, const float o[3], const float d[3], float tmin,
+                                       float lod0, float lod1, float tfar, float *tin, unsigned *lod)
+{
+    float ax = B->cx[l] - o[0], ay = B->cy[l] - o[1], az = B->cz[l] - o[2];
+    float b = ax * d[0] + ay * d[1] + az * d[2];
+    float qx = ay * d[2] - az * d[1];
+    float qy = az * d[0] - ax * d[2];
+    float qz = ax * d[1] - ay * d[0];
+    float p2 = qx * qx + qy * qy + qz * qz;
+    float R = B->r[l];
+    float m = SG_BUNDLE_MARGIN * (fabsf(ax) + fabsf(ay) + fabsf(az) + R);
+    float Rm = R + m;
+    float h2 = Rm * Rm - p2;
+    float hh = sqrtf(h2 > 0.0f ? h2 : 0.0f);
+    float t0 = b - hh - m, t1 = b + hh + m;
+    const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
+    float ux = (float)B->nx[l] * ns, uy = (float)B->ny[l] * ns, uz = (float)B->nz[l] * ns;
+    float au = ax * ux + ay * uy + az * uz;
+    float du = d[0] * ux + d[1] * uy + d[2] * uz;
+    float rs = R * ss;
+    float inv = 1.0f / du;
+    float n0 = ((float)B->slo[l] * rs - m + au) * inv;
+    float n1 = ((float)B->shi[l] * rs + m + au) * inv;
+    float tn = n0 < n1 ? n0 : n1, tf = n0 > n1 ? n0 : n1;
+    t0 = tn > t0 ? tn : t0;
+    t1 = tf < t1 ? tf : t1;
+    *tin = t0;
+    *lod = (unsigned)(2.0f * R < lod0 + lod1 * b);
+    return (unsigned)(h2 >= 0.0f && t0 <= t1 && t1 >= tmin && t0 <= tfar);
+}
+
+/* Scalar reference. Returns the mask of lanes entered in [tmin, tfar];
+ * tin[l] for every lane; *lod the mask of point-sized lanes. min and max
+ * are written as the SIMD instructions compute them (the second operand
+ * when a comparison fails), so NaN gives the same lane results. */
 static inline unsigned sg_bundle_test_scalar(const sg_stree_bundle *B, const sg_bundle_ray *r, float tfar,
                                              float tin[SG_STREE_WIDTH], unsigned *lod)
 {
     unsigned mask = 0, lm = 0;
     for (int l = 0; l < SG_STREE_WIDTH; ++l) {
-        float ax = B->cx[l] - r->o[0], ay = B->cy[l] - r->o[1], az = B->cz[l] - r->o[2];
-        float b = ax * r->d[0] + ay * r->d[1] + az * r->d[2];
-        float qx = ay * r->d[2] - az * r->d[1];
-        float qy = az * r->d[0] - ax * r->d[2];
-        float qz = ax * r->d[1] - ay * r->d[0];
-        float p2 = qx * qx + qy * qy + qz * qz;
-        float R = B->r[l];
-        float m = SG_BUNDLE_MARGIN * (fabsf(ax) + fabsf(ay) + fabsf(az) + R);
-        float Rm = R + m;
-        float h2 = Rm * Rm - p2;
-        float hh = sqrtf(h2 > 0.0f ? h2 : 0.0f);
-        float t0 = b - hh - m, t1 = b + hh + m;
-        const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
-        float ux = (float)B->nx[l] * ns, uy = (float)B->ny[l] * ns, uz = (float)B->nz[l] * ns;
-        float au = ax * ux + ay * uy + az * uz;
-        float du = r->d[0] * ux + r->d[1] * uy + r->d[2] * uz;
-        float rs = R * ss;
-        float inv = 1.0f / du;
-        float n0 = ((float)B->slo[l] * rs - m + au) * inv;
-        float n1 = ((float)B->shi[l] * rs + m + au) * inv;
-        float tn = n0 < n1 ? n0 : n1, tf = n0 > n1 ? n0 : n1;
-        t0 = tn > t0 ? tn : t0;
-        t1 = tf < t1 ? tf : t1;
-        tin[l] = t0;
-        mask |= (unsigned)(h2 >= 0.0f && t0 <= t1 && t1 >= r->tmin && t0 <= tfar) << l;
-        lm |= (unsigned)(2.0f * R < r->lod0 + r->lod1 * b) << l;
+        unsigned pl;
+        mask |= sg_bundle__lane(B, l, r->o, r->d, r->tmin, r->lod0, r->lod1, tfar, &tin[l], &pl) << l;
+        lm |= pl << l;
     }
     *lod = lm;
     return mask;
@@ -216,6 +232,91 @@ static inline unsigned sg_bundle_test(const sg_stree_bundle *B, const sg_bundle_
                                       float tin[SG_STREE_WIDTH], unsigned *lod)
 {
     return sg_bundle_test_scalar(B, r, tfar, tin, lod);
+}
+#endif
+
+/* ---- One node against sixteen rays (a 4x4 packet) --------------------------
+ *
+ * sg_bundle_test16 runs sg_bundle_test_scalar's operations for lane l of
+ * a bundle against sixteen rays at once (SIMD across the rays, not the
+ * nodes), so ray i gets the bits sg_bundle_test gives it for that lane:
+ * the node's values (centre, radius, int8 normal and slab converted) are
+ * scalars broadcast, the ray's are SoA lanes. A packet walk reads each
+ * child's entry mask, floors and point mask straight from the result,
+ * with no per-ray loop. AVX-512 (one register), AVX2 (two halves) or a
+ * scalar loop, the same operations in the same order. */
+typedef struct sg_bundle_ray16 {
+    _Alignas(64) float ox[16]; /* origins (the alignment binds this one field) */
+    float oy[16], oz[16];
+    float dx[16], dy[16], dz[16]; /* unit directions */
+    float tmin[16];
+    float lod0[16], lod1[16];     /* as sg_bundle_ray's */
+} sg_bundle_ray16;
+
+/* Scalar reference: rays of lane i of r against node lane l of B. Returns
+ * the mask of rays that enter it in [tmin, tfar[i]]; tin[i] for every ray;
+ * *lod the mask of rays for which it is point-sized. */
+static inline unsigned sg_bundle_test16_scalar(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                               const float tfar[16], float tin[16], unsigned *lod)
+{
+    unsigned mask = 0, lm = 0;
+    for (int i = 0; i < 16; ++i) {
+        const float o[3] = {r->ox[i], r->oy[i], r->oz[i]}, d[3] = {r->dx[i], r->dy[i], r->dz[i]};
+        unsigned pl;
+        mask |= sg_bundle__lane(B, l, o, d, r->tmin[i], r->lod0[i], r->lod1[i], tfar[i], &tin[i], &pl) << i;
+        lm |= pl << i;
+    }
+    *lod = lm;
+    return mask;
+}
+
+#if SG_V16_SIMD
+#define SG_BUNDLE_SIMD16 1
+static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                        const float tfar[16], float tin[16], unsigned *lod)
+{
+    const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
+    const float Rs = B->r[l];
+    const float uxs = (float)B->nx[l] * ns, uys = (float)B->ny[l] * ns, uzs = (float)B->nz[l] * ns;
+    const float rss = Rs * ss;
+    const sg_v16 dx = sg_v16_load(r->dx), dy = sg_v16_load(r->dy), dz = sg_v16_load(r->dz);
+    const sg_v16 ax = sg_v16_sub(sg_v16_set1(B->cx[l]), sg_v16_load(r->ox));
+    const sg_v16 ay = sg_v16_sub(sg_v16_set1(B->cy[l]), sg_v16_load(r->oy));
+    const sg_v16 az = sg_v16_sub(sg_v16_set1(B->cz[l]), sg_v16_load(r->oz));
+    const sg_v16 b = sg_v16_add(sg_v16_add(sg_v16_mul(ax, dx), sg_v16_mul(ay, dy)), sg_v16_mul(az, dz));
+    const sg_v16 qx = sg_v16_sub(sg_v16_mul(ay, dz), sg_v16_mul(az, dy));
+    const sg_v16 qy = sg_v16_sub(sg_v16_mul(az, dx), sg_v16_mul(ax, dz));
+    const sg_v16 qz = sg_v16_sub(sg_v16_mul(ax, dy), sg_v16_mul(ay, dx));
+    const sg_v16 p2 = sg_v16_add(sg_v16_add(sg_v16_mul(qx, qx), sg_v16_mul(qy, qy)), sg_v16_mul(qz, qz));
+    const sg_v16 R = sg_v16_set1(Rs);
+    const sg_v16 l1 = sg_v16_add(sg_v16_add(sg_v16_add(sg_v16_abs(ax), sg_v16_abs(ay)), sg_v16_abs(az)), R);
+    const sg_v16 m = sg_v16_mul(sg_v16_set1(SG_BUNDLE_MARGIN), l1);
+    const sg_v16 Rm = sg_v16_add(R, m);
+    const sg_v16 h2 = sg_v16_sub(sg_v16_mul(Rm, Rm), p2);
+    const sg_v16 hh = sg_v16_sqrt(sg_v16_pos(h2));
+    sg_v16 t0 = sg_v16_sub(sg_v16_sub(b, hh), m);
+    sg_v16 t1 = sg_v16_add(sg_v16_add(b, hh), m);
+    const sg_v16 ux = sg_v16_set1(uxs), uy = sg_v16_set1(uys), uz = sg_v16_set1(uzs);
+    const sg_v16 au = sg_v16_add(sg_v16_add(sg_v16_mul(ax, ux), sg_v16_mul(ay, uy)), sg_v16_mul(az, uz));
+    const sg_v16 du = sg_v16_add(sg_v16_add(sg_v16_mul(dx, ux), sg_v16_mul(dy, uy)), sg_v16_mul(dz, uz));
+    const sg_v16 inv = sg_v16_div(sg_v16_set1(1.0f), du);
+    const sg_v16 n0 = sg_v16_mul(sg_v16_add(sg_v16_sub(sg_v16_set1((float)B->slo[l] * rss), m), au), inv);
+    const sg_v16 n1 = sg_v16_mul(sg_v16_add(sg_v16_add(sg_v16_set1((float)B->shi[l] * rss), m), au), inv);
+    const sg_v16 tn = sg_v16_min(n0, n1), tf = sg_v16_max(n0, n1);
+    t0 = sg_v16_max(tn, t0);
+    t1 = sg_v16_min(tf, t1);
+    sg_v16_store(tin, t0);
+    const unsigned hit = sg_v16_ge(h2, sg_v16_set1(0.0f)) & sg_v16_le(t0, t1) &
+                         sg_v16_ge(t1, sg_v16_load(r->tmin)) & sg_v16_le(t0, sg_v16_load(tfar));
+    *lod = sg_v16_lt(sg_v16_add(R, R), sg_v16_add(sg_v16_load(r->lod0), sg_v16_mul(sg_v16_load(r->lod1), b)));
+    return hit;
+}
+#else
+#define SG_BUNDLE_SIMD16 0
+static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                        const float tfar[16], float tin[16], unsigned *lod)
+{
+    return sg_bundle_test16_scalar(B, l, r, tfar, tin, lod);
 }
 #endif
 

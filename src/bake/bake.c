@@ -425,15 +425,14 @@ sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_h
     return irradiance_of(b, h->model, ids, wts, n, side, h->hit.n);
 }
 
-sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo)
+/* sg_bake_lookup from the hit's sites (n of them in ids, wts; rewritten). */
+static sg_vec3 lookup_sites(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo, uint32_t *ids,
+                            float *wts, int n)
 {
     const sg_material *m = sg_world_material(w, h->model);
-    uint32_t ids[LOOKUP_SPLATS], sid[LOOKUP_SPLATS];
-    float wts[LOOKUP_SPLATS], sw[LOOKUP_SPLATS];
-    int side;
-    /* The hit's sites once, for the albedo (a hybrid hit's is their
-     * blend) and, kept facing, for the light. */
-    int n = sg_scene_hit_sites(sg_world_scene(w, h->model), &h->hit, ids, wts, LOOKUP_SPLATS), ns = 0;
+    uint32_t sid[LOOKUP_SPLATS];
+    float sw[LOOKUP_SPLATS];
+    int side, ns = 0;
     sg_vec3 rho = sg_world_albedo_sites(w, h, ids, wts, n);
     n = keep_facing(w, h, wo, ids, wts, n, &side);
     sg_vec3 E = irradiance_of(b, h->model, ids, wts, n, side, h->hit.n);
@@ -466,6 +465,53 @@ sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *
     float ks = m->specular > 1.0f ? 1.0f : m->specular;
     return sg_v3_add(sg_v3_add(m->emission, sg_v3_scale(sg_v3_mul(rho, E), (1.0f - ks) * INV_PI)),
                      sg_v3_scale(S, ks));
+}
+
+sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo)
+{
+    uint32_t ids[LOOKUP_SPLATS];
+    float wts[LOOKUP_SPLATS];
+    /* The hit's sites once, for the albedo (a hybrid hit's is their
+     * blend) and, kept facing, for the light. */
+    int n = sg_scene_hit_sites(sg_world_scene(w, h->model), &h->hit, ids, wts, LOOKUP_SPLATS);
+    return lookup_sites(b, w, h, wo, ids, wts, n);
+}
+
+void sg_bake_lookup16(const sg_bake *b, const sg_world *w, const sg_world_hit *h, const sg_vec3 *wo, unsigned mask,
+                      sg_vec3 *out)
+{
+    uint32_t ids[16][LOOKUP_SPLATS];
+    float wts[16][LOOKUP_SPLATS];
+    int n[16];
+    mask &= 0xFFFFu;
+    /* Every hit's sites first, and what the lookup will read of each site
+     * asked for: a block's sites are scattered over arrays far larger than
+     * the cache, and one pixel at a time their misses came one by one. */
+    for (unsigned m = mask; m; m &= m - 1) {
+        const int r = __builtin_ctz(m);
+        const sg_scene *sc = sg_world_scene(w, h[r].model);
+        n[r] = sg_scene_hit_sites(sc, &h[r].hit, ids[r], wts[r], LOOKUP_SPLATS);
+        const sg_sites *ps = sg_scene_sites(sc);
+        const float *E = b->E[h[r].model];
+        for (int j = 0; j < n[r]; ++j) {
+            const uint32_t i = ids[r][j];
+            __builtin_prefetch(E + SG_BAKE_SPLAT_FLOATS * (size_t)i);
+            if (i >= ps->count)
+                continue; /* not a site of the table (a point's own colour) */
+            __builtin_prefetch(&ps->nx[i]);
+            __builtin_prefetch(&ps->ny[i]);
+            __builtin_prefetch(&ps->nz[i]);
+            if (ps->ar) {
+                __builtin_prefetch(&ps->ar[i]);
+                __builtin_prefetch(&ps->ag[i]);
+                __builtin_prefetch(&ps->ab[i]);
+            }
+        }
+    }
+    for (unsigned m = mask; m; m &= m - 1) {
+        const int r = __builtin_ctz(m);
+        out[r] = lookup_sites(b, w, &h[r], wo[r], ids[r], wts[r], n[r]);
+    }
 }
 
 sg_status sg_bake_render(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *desc, sg_image *out,

@@ -204,6 +204,14 @@ sg_vec3 sg_bake_irradiance(const sg_bake *b, const sg_world *w, const sg_world_h
  * pointing away from the surface). */
 sg_vec3 sg_bake_lookup(const sg_bake *b, const sg_world *w, const sg_world_hit *h, sg_vec3 wo);
 
+/* sg_bake_lookup for up to sixteen hits (bit r of mask: h[r] seen along
+ * wo[r]): out[r] is sg_bake_lookup(b, w, &h[r], wo[r]), bit for bit. The
+ * sites of all of them are found first and their data prefetched, so a
+ * block of pixels waits on memory once rather than pixel by pixel. Only
+ * the entries whose bit is set are read or written. */
+void sg_bake_lookup16(const sg_bake *b, const sg_world *w, const sg_world_hit *h, const sg_vec3 *wo, unsigned mask,
+                      sg_vec3 *out);
+
 typedef struct sg_bake_frame_desc {
     sg_camera camera;   /* required                     */
     int width, height;  /* default 512 x 512             */

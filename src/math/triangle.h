@@ -32,6 +32,7 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "math/v16.h"
 #include "math/vec3.h"
 
 typedef struct sg_tri_ray {
@@ -221,6 +222,68 @@ static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, 
                                          float tmax, sg_tri4_hit *out)
 {
     return sg_tri_intersect4_scalar(r, t, valid, tmin, tmax, out);
+}
+#endif
+
+/* ---- One triangle against sixteen rays ------------------------------------
+ *
+ * For a packet of rays with one origin and one axis permutation (kx, ky,
+ * kz; camera rays of a 4x4 block), the triangle's vertices relative to the
+ * origin in the permuted axes are the same for every ray (sg_tri4_gather's
+ * values): sg_tri_intersect16 runs sg_tri_intersect's operations with those
+ * as scalars and each ray's shear as a lane, so a lane that it reports hit
+ * has sg_tri_intersect's t, b1, b2 and front, bit for bit. Lanes whose edge
+ * function comes out exactly 0.0 are not decided here: they come back in
+ * *exact0 for the caller to test with sg_tri_intersect (its double
+ * fallback). */
+typedef struct sg_tri_shear16 {
+    float sx[16], sy[16], sz[16]; /* each ray's sg_tri_ray sx, sy, sz */
+} sg_tri_shear16;
+
+typedef struct sg_tri16_hit {
+    float t[16], b1[16], b2[16];
+    unsigned front; /* bit i: ray i met the counter-clockwise side */
+} sg_tri16_hit;
+
+#if SG_V16_SIMD
+/* a, b, c: the vertices minus the origin, in the order kx, ky, kz. Lanes
+ * outside valid are ignored; tmin and tmax per ray. */
+static inline unsigned sg_tri_intersect16(const sg_tri_shear16 *r, const float a[3], const float b[3],
+                                          const float c[3], unsigned valid, const float tmin[16],
+                                          const float tmax[16], sg_tri16_hit *out, unsigned *exact0)
+{
+    const sg_v16 sx = sg_v16_load(r->sx), sy = sg_v16_load(r->sy), sz = sg_v16_load(r->sz);
+    const sg_v16 zero = sg_v16_set1(0.0f);
+    const sg_v16 ax = sg_v16_set1(a[0]), ay = sg_v16_set1(a[1]), az = sg_v16_set1(a[2]);
+    const sg_v16 bx = sg_v16_set1(b[0]), by = sg_v16_set1(b[1]), bz = sg_v16_set1(b[2]);
+    const sg_v16 cx = sg_v16_set1(c[0]), cy = sg_v16_set1(c[1]), cz = sg_v16_set1(c[2]);
+    const sg_v16 Ax = sg_v16_sub(ax, sg_v16_mul(sx, az)), Ay = sg_v16_sub(ay, sg_v16_mul(sy, az));
+    const sg_v16 Bx = sg_v16_sub(bx, sg_v16_mul(sx, bz)), By = sg_v16_sub(by, sg_v16_mul(sy, bz));
+    const sg_v16 Cx = sg_v16_sub(cx, sg_v16_mul(sx, cz)), Cy = sg_v16_sub(cy, sg_v16_mul(sy, cz));
+    const sg_v16 U = sg_v16_sub(sg_v16_mul(Cx, By), sg_v16_mul(Cy, Bx));
+    const sg_v16 V = sg_v16_sub(sg_v16_mul(Ax, Cy), sg_v16_mul(Ay, Cx));
+    const sg_v16 W = sg_v16_sub(sg_v16_mul(Bx, Ay), sg_v16_mul(By, Ax));
+    const unsigned e0 = (sg_v16_eq(U, zero) | sg_v16_eq(V, zero) | sg_v16_eq(W, zero)) & valid;
+    const unsigned anyneg = sg_v16_lt(U, zero) | sg_v16_lt(V, zero) | sg_v16_lt(W, zero);
+    const unsigned anypos = sg_v16_gt(U, zero) | sg_v16_gt(V, zero) | sg_v16_gt(W, zero);
+    unsigned mask = valid & ~e0 & ~(anyneg & anypos);
+    *exact0 = e0;
+    out->front = 0;
+    if (!mask)
+        return 0;
+    const sg_v16 det = sg_v16_add(sg_v16_add(U, V), W);
+    const sg_v16 T = sg_v16_add(sg_v16_add(sg_v16_mul(U, sg_v16_mul(sz, az)), sg_v16_mul(V, sg_v16_mul(sz, bz))),
+                                sg_v16_mul(W, sg_v16_mul(sz, cz)));
+    const sg_v16 inv = sg_v16_div(sg_v16_set1(1.0f), det);
+    const sg_v16 t = sg_v16_mul(T, inv);
+    mask &= sg_v16_neq(det, zero) & sg_v16_ge(t, sg_v16_load(tmin)) & sg_v16_le(t, sg_v16_load(tmax));
+    if (!mask)
+        return 0;
+    sg_v16_store(out->t, t);
+    sg_v16_store(out->b1, sg_v16_mul(V, inv));
+    sg_v16_store(out->b2, sg_v16_mul(W, inv));
+    out->front = sg_v16_gt(det, zero) & mask;
+    return mask;
 }
 #endif
 

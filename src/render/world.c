@@ -406,37 +406,17 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
     return found;
 }
 
-unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
-                             sg_ray_stats *stats)
+/* world_nearest for the rays of group, which visit the models in one
+ * order (ord, entry[r][k] ray r's entry into the k-th): each model traced
+ * for the rays still searching in one call (sg_scene_intersect16). */
+static unsigned world_group(const sg_world *w, const sg_ray *rays, unsigned group, const size_t *ord,
+                            float (*entry)[SORTED_MAX], sg_world_hit *h, sg_ray_stats *stats)
 {
-    mask &= 15u;
-    size_t n = w->count <= SORTED_MAX ? w->count : 0;
-    size_t order[4][SORTED_MAX];
-    float entry[4][SORTED_MAX];
-    int same = n > 0;
-    for (unsigned m = mask; m && same; m &= m - 1) {
-        int r = __builtin_ctz(m);
-        model_order(w, &rays[r], n, order[r], entry[r]);
-        same = memcmp(order[r], order[__builtin_ctz(mask)], n * sizeof order[r][0]) == 0;
-    }
-    unsigned found = 0;
-    if (!same) {
-        /* The rays visit the models in different orders: one at a time
-         * (the order decides each model's tmax, and so the bits). */
-        for (unsigned m = mask; m; m &= m - 1) {
-            int r = __builtin_ctz(m);
-            if (sg_world_intersect(w, &rays[r], &h[r], stats))
-                found |= 1u << r;
-        }
-        return found;
-    }
-    /* world_nearest for each ray, the models in the rays' common order,
-     * each model traced for the rays still searching in one call. */
-    sg_ray rr[4];
+    sg_ray rr[16];
     sg_ray_stats local = {0};
-    memcpy(rr, rays, sizeof rr);
-    const size_t *ord = order[__builtin_ctz(mask)];
-    unsigned searching = mask;
+    for (unsigned m = group; m; m &= m - 1)
+        rr[__builtin_ctz(m)] = rays[__builtin_ctz(m)];
+    unsigned searching = group, found = 0;
     for (size_t k = 0; k < w->count && searching; ++k) {
         for (unsigned m = searching; m; m &= m - 1) {
             int r = __builtin_ctz(m);
@@ -446,8 +426,8 @@ unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned m
         if (!searching)
             break;
         size_t i = ord[k];
-        sg_hit hit[4];
-        unsigned got = sg_scene_intersect4(w->scenes[i], rr, searching, hit, stats ? &local : NULL);
+        sg_hit hit[16];
+        unsigned got = sg_scene_intersect16(w->scenes[i], rr, searching, hit, stats ? &local : NULL);
         for (unsigned m = got; m; m &= m - 1) {
             int r = __builtin_ctz(m);
             h[r].hit = hit[r];
@@ -456,18 +436,59 @@ unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned m
         }
         found |= got;
     }
-    for (unsigned m = mask & ~found; m; m &= m - 1) {
+    for (unsigned m = group & ~found; m; m &= m - 1) {
         int r = __builtin_ctz(m);
         h[r].hit.splat = SG_INVALID_ID;
         h[r].model = 0;
     }
     if (stats) {
         /* one ray and at most one hit per ray, as sg_world_intersect counts */
-        local.rays = (uint64_t)__builtin_popcount(mask);
+        local.rays = (uint64_t)__builtin_popcount(group);
         local.hits = (uint64_t)__builtin_popcount(found);
         sg_ray_stats_add(stats, &local);
     }
     return found;
+}
+
+unsigned sg_world_intersect16(const sg_world *w, const sg_ray *rays, unsigned mask, sg_world_hit *h,
+                              sg_ray_stats *stats)
+{
+    mask &= 0xFFFFu;
+    size_t n = w->count <= SORTED_MAX ? w->count : 0;
+    unsigned found = 0;
+    if (!n) { /* too many models to sort per ray: one at a time */
+        for (unsigned m = mask; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (sg_world_intersect(w, &rays[r], &h[r], stats))
+                found |= 1u << r;
+        }
+        return found;
+    }
+    size_t order[16][SORTED_MAX];
+    float entry[16][SORTED_MAX];
+    for (unsigned m = mask; m; m &= m - 1)
+        model_order(w, &rays[__builtin_ctz(m)], n, order[__builtin_ctz(m)], entry[__builtin_ctz(m)]);
+    /* The order decides each model's tmax, and so the bits: rays are
+     * traced together only with rays that visit the models in their order
+     * (a block on the ground's edge splits into two groups). */
+    for (unsigned pending = mask; pending;) {
+        const int r0 = __builtin_ctz(pending);
+        unsigned group = 0;
+        for (unsigned m = pending; m; m &= m - 1) {
+            int r = __builtin_ctz(m);
+            if (memcmp(order[r], order[r0], n * sizeof order[r][0]) == 0)
+                group |= 1u << r;
+        }
+        pending &= ~group;
+        found |= world_group(w, rays, group, order[r0], entry, h, stats);
+    }
+    return found;
+}
+
+unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
+                             sg_ray_stats *stats)
+{
+    return sg_world_intersect16(w, rays, mask & 15u, h, stats);
 }
 
 int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats)

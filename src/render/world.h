@@ -72,10 +72,19 @@ int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg
  * 2 x 2 quad of camera rays: each gets exactly sg_world_intersect's hit
  * (bit for bit, tested). Rays that visit the models in the same order
  * (by box entry) share each model's traversal (sg_scene_intersect4);
- * otherwise they are traced one by one. Returns the mask of the rays
+ * otherwise they are traced in one packet per order. Returns the mask of the rays
  * that hit; h[r] of a ray outside mask is left alone. */
 unsigned sg_world_intersect4(const sg_world *w, const sg_ray rays[4], unsigned mask, sg_world_hit h[4],
                              sg_ray_stats *stats);
+
+/* sg_world_intersect4 for up to sixteen rays (bits 0-15 of mask), e.g. a
+ * 4 x 4 block of camera rays: each gets exactly sg_world_intersect's hit.
+ * Rays that visit the models in one order share each model's traversal
+ * (sg_scene_intersect16); a block whose rays disagree is traced as one
+ * packet per order. Only the entries of rays and h whose bit is set are
+ * read or written. */
+unsigned sg_world_intersect16(const sg_world *w, const sg_ray *rays, unsigned mask, sg_world_hit *h,
+                              sg_ray_stats *stats);
 
 /* 1 if any model is hit in [tmin, tmax]. */
 int sg_world_occluded(const sg_world *w, const sg_ray *ray, sg_ray_stats *stats);

@@ -235,6 +235,14 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
 unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
                               sg_hybrid_hit hits[4], sg_hybrid_stats *stats);
 
+/* sg_hybrid_intersect4 for up to sixteen rays (bit r of mask: rays[r]; a
+ * 4x4 block of camera rays shares more of the walk than a quad): the
+ * same hits, bit for bit. Only the entries of rays, fp and hits whose bit
+ * is set are read or written, so shorter arrays may be passed with a
+ * mask that fits them. */
+unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
+                               sg_hybrid_hit *hits, sg_hybrid_stats *stats);
+
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays); the same
  * acceptance as sg_hybrid_intersect, in no particular order. */
 int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats);

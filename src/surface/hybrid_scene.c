@@ -238,13 +238,19 @@ int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, floa
 unsigned sg_hybrid_scene_intersect4(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray rays[4],
                                     unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
 {
-    sg_footprint fp[4];
-    sg_hybrid_hit hh[4];
+    return sg_hybrid_scene_intersect16(h, s, lod, rays, mask & 15u, hits, stats);
+}
+
+unsigned sg_hybrid_scene_intersect16(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *rays,
+                                     unsigned mask, sg_hit *hits, sg_ray_stats *stats)
+{
+    sg_footprint fp[16];
+    sg_hybrid_hit hh[16];
     sg_hybrid_stats hs = {0};
-    mask &= 15u;
+    mask &= 0xFFFFu;
     for (unsigned m = mask; m; m &= m - 1)
         fp[__builtin_ctz(m)] = footprint(lod, &rays[__builtin_ctz(m)]);
-    unsigned found = sg_hybrid_intersect4(h, rays, mask, lod > 0.0f ? fp : NULL, hh, stats ? &hs : NULL);
+    unsigned found = sg_hybrid_intersect16(h, rays, mask, lod > 0.0f ? fp : NULL, hh, stats ? &hs : NULL);
     to_ray_stats(stats, &hs);
     for (unsigned m = mask; m; m &= m - 1) {
         const int r = __builtin_ctz(m);

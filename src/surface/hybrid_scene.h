@@ -74,6 +74,9 @@ int sg_hybrid_scene_intersect(const sg_hybrid *h, const sg_hybrid_sites *s, floa
  * SG_INVALID_ID. */
 unsigned sg_hybrid_scene_intersect4(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray rays[4],
                                     unsigned mask, sg_hit hits[4], sg_ray_stats *stats);
+/* The same for up to sixteen rays (bits 0-15; sg_hybrid_intersect16). */
+unsigned sg_hybrid_scene_intersect16(const sg_hybrid *h, const sg_hybrid_sites *s, float lod, const sg_ray *rays,
+                                     unsigned mask, sg_hit *hits, sg_ray_stats *stats);
 int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, sg_ray_stats *stats);
 
 /* The sites around a hit and their weights (sum 1): a triangle's three

@@ -60,9 +60,10 @@
  *     entries (sphere_tree.h invariant 3); the heap holds at most
  *     HEAP_CAP and a ray that would need more is traced again with the
  *     stack (counted in heap_overflows; same hit by invariant 2);
- *  4. each ray of a packet (sg_hybrid_intersect4, "Packets" below) gets
- *     its single-ray hit bit for bit (by invariant 2; test_hybrid
- *     intersect4_matches_single).
+ *  4. each ray of a packet (sg_hybrid_intersect16 and its first four
+ *     lanes sg_hybrid_intersect4, "Packets" below) gets its single-ray hit
+ *     bit for bit (by invariant 2; test_hybrid intersect4_matches_single,
+ *     intersect16_matches_single).
  */
 #include <float.h>
 #include <math.h>
@@ -215,29 +216,30 @@ static sg_vec3 tri_normal(const sg_hybrid *h, uint32_t i)
  * resolve as one at a time would; returns 1 when one became the best.
  * Shared by the single-ray and the packet leaf tests (always inlined:
  * the single-ray loop compiles as it did before packets). */
+static inline __attribute__((always_inline)) int take_hit(const sg_hybrid *h, const tray *r, float t, float b1,
+                                                          float b2, int front, uint32_t i, best *b)
+{
+    if (front ? !r->accept_front : !r->accept_back)
+        return 0;
+    if (!better(t, i, b))
+        return 0;
+    if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
+        return 0;
+    b->t = t;
+    b->key = i;
+    b->b1 = b1;
+    b->b2 = b2;
+    b->front = front;
+    return 1;
+}
+
 static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const sg_tri4_hit *th,
                                                            unsigned mask, uint32_t g, best *b)
 {
     int found = 0;
-    for (uint32_t l = 0; mask; ++l, mask >>= 1) {
-        if (!(mask & 1u))
-            continue;
-        const uint32_t i = g + l;
-        const int front = (int)(th->front >> l & 1u);
-        const float t = th->t[l];
-        if (front ? !r->accept_front : !r->accept_back)
-            continue;
-        if (!better(t, i, b))
-            continue;
-        if (r->ray->self_r > 0.0f && t < r->ray->self_r && sg_ray_is_self(r->ray, t, tri_normal(h, i)))
-            continue;
-        b->t = t;
-        b->key = i;
-        b->b1 = th->b1[l];
-        b->b2 = th->b2[l];
-        b->front = front;
-        found = 1;
-    }
+    for (uint32_t l = 0; mask; ++l, mask >>= 1)
+        if (mask & 1u)
+            found |= take_hit(h, r, th->t[l], th->b1[l], th->b2[l], (int)(th->front >> l & 1u), g + l, b);
     return found;
 }
 
@@ -527,10 +529,10 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
     return got;
 }
 
-/* ---- Packets: four rays, one traversal -----------------------------------
+/* ---- Packets: up to sixteen rays, one traversal ----------------------------
  *
- * sg_hybrid_intersect4 walks the tree once for up to four rays (a 2x2 quad
- * of camera rays). An entry carries, per ray, the node's floor (as a
+ * sg_hybrid_intersect16 walks the tree once for up to sixteen rays (a 4x4
+ * block of camera rays; sg_hybrid_intersect4 is its first four lanes). An entry carries, per ray, the node's floor (as a
  * single ray's entry does) and the mask of the rays that go on into it: a
  * ray is in it only when it entered the node's sphere and every ancestor's,
  * and each of those was opened for it, by the same per-ray rules
@@ -539,12 +541,16 @@ int sg_hybrid_intersect(const sg_hybrid *h, const sg_ray *ray, const sg_footprin
  * pruning (the ray's floor beyond its own best) drops only crossings that
  * cannot win: by invariant 2 each ray gets its single-ray hit, bit for bit,
  * whatever order the packet takes. The order is nearest first by the least
- * floor of the entry's rays. Sphere and triangle tests run per ray with
- * the single-ray kernels on the ray's own best; what the rays share is the
- * walk itself (one pop, one sort, one prefetch per node), the bundle's and
- * the triangles' cache lines, and, for rays with one origin and one axis
+ * floor of the entry's rays. Sphere and triangle tests run on each ray's
+ * own best with the single ray's operations: for a few rays, ray by ray
+ * with the single-ray kernels; for more (SPARSE_LANES), node by node and
+ * triangle by triangle across the rays (sg_bundle_test16,
+ * sg_tri_intersect16), after a cone test that skips the children no ray
+ * of a one-origin packet can enter. What the rays share is the walk itself
+ * (one pop, one sort, one prefetch per node), the bundle's and the
+ * triangles' cache lines, and, for rays with one origin and one axis
  * permutation (sg_tri_ray), the leaf's gathered vertices. */
-enum { PW = 4 };
+enum { PW = 16 };
 
 typedef struct pentry {
     float t[PW];    /* per ray: its floor ("Order"); valid for rays in lanes */
@@ -553,11 +559,56 @@ typedef struct pentry {
     uint32_t lanes; /* rays that go on into the node                    */
 } pentry;
 
+/* The packet's rays as SIMD lanes (sg_bundle_test16 tests one node against
+ * all of them), and each ray's best t beside its best (kept in step). */
+typedef struct psoa {
+    sg_bundle_ray16 br;         /* lanes outside the packet: copies of one in it */
+    _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
+    sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
+    unsigned cull;              /* rays with r[i].cull                          */
+    int cone;                   /* 1: the rays leave one origin within a cone   */
+    float co[3], ca[3];         /* its apex (the origin) and unit axis          */
+    float csin, ccos;           /* sine and cosine of its half-angle, widened   */
+} psoa;
+
+#if SG_BUNDLE_SIMD16
+/* The children of bundle B that some ray of the packet may enter: a
+ * sphere that does not meet the packet's cone is entered by none of its
+ * rays (Eberly's sphere-cone test, the radius and the cone widened far
+ * beyond the rounding of either test), so its 16-ray test is skipped; it
+ * would have come out 0 for every ray. Any ray order: all children. */
+static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
+{
+    unsigned kids = 0;
+    if (!P->cone) {
+        for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
+            kids |= 1u << l;
+        return kids;
+    }
+    const float s2 = P->csin * P->csin, c2 = P->ccos * P->ccos, back = 1.0f / P->csin;
+    for (int l = 0; l < W; ++l) {
+        const float vx = B->cx[l] - P->co[0], vy = B->cy[l] - P->co[1], vz = B->cz[l] - P->co[2];
+        const float r = B->r[l] * 1.001f + 1e-4f * (fabsf(vx) + fabsf(vy) + fabsf(vz));
+        /* apex moved back along the axis by r / sin: the cone of centres */
+        const float ux = vx + r * back * P->ca[0], uy = vy + r * back * P->ca[1], uz = vz + r * back * P->ca[2];
+        const float e = ux * P->ca[0] + uy * P->ca[1] + uz * P->ca[2];
+        const float u2 = ux * ux + uy * uy + uz * uz;
+        const float f = -(vx * P->ca[0] + vy * P->ca[1] + vz * P->ca[2]);
+        const float v2 = vx * vx + vy * vy + vz * vz;
+        /* in the cone of centres, and not behind the apex beyond r; NaN (an
+         * empty lane) fails */
+        const int in = e > 0.0f && e * e >= u2 * c2 && (!(f > 0.0f && f * f >= v2 * s2) || v2 <= r * r);
+        kids |= (unsigned)in << l;
+    }
+    return kids;
+}
+#endif
+
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
  * decides it (disk hit, skipped, or opened). Returns how many were
  * written to out. */
-static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, const float *floor,
+static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
                           unsigned lanes, pentry *out, counters *c)
 {
     const sg_stree_bundle *B = &h->tree.bundles[cb];
@@ -578,6 +629,7 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
                 continue; /* a disk found in this bundle is nearer */
             if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[i][l], c) == NODE_OPEN)
                 open[i] |= 1u << l;
+            P->bt[i] = bst[i].t;
         }
         any |= open[i];
     }
@@ -620,6 +672,89 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
     return n;
 }
 
+#if SG_BUNDLE_SIMD16
+/* push_children4 with the sphere tests across the rays: per child, one
+ * sg_bundle_test16 gives the rays that enter it, their floors and which of
+ * them see it point-sized, so the child's lanes and key come straight from
+ * the masks. Each ray's point decisions are node_point's, made for its
+ * children in lane order as alone; a disk hit lowers the ray's far limit
+ * for the later children's tests, which then drop only children that
+ * begin beyond its best (pruned at their pop otherwise): the same hits. */
+static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
+                           unsigned lanes, pentry *out, counters *c)
+{
+    const sg_stree_bundle *B = &h->tree.bundles[cb];
+    _Alignas(64) float ft[W][PW]; /* per child, per ray: its floor */
+    float key[W];
+    unsigned go[W], any = 0;
+    const sg_v16 fl = sg_v16_load(floor);
+    c->spheres += (uint64_t)W * (uint64_t)__builtin_popcount(lanes);
+    for (unsigned kids = cone_children(B, P); kids; kids &= kids - 1) {
+        const int l = __builtin_ctz(kids);
+        _Alignas(64) float tin[PW];
+        unsigned lod;
+        const unsigned mask = sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod) & lanes;
+        if (!mask)
+            continue;
+        const sg_v16 f = sg_v16_max(sg_v16_load(tin), fl); /* tin > floor ? tin : floor */
+        sg_v16_store(ft[l], f);
+        unsigned open = mask & ~lod;
+        for (unsigned ml = mask & lod; ml; ml &= ml - 1) {
+            const int i = __builtin_ctz(ml);
+            if (!(ft[l][i] <= bst[i].t))
+                continue; /* a disk found in this bundle is nearer */
+            if (node_point(h, cb * (uint32_t)W + (uint32_t)l, &r[i], &bst[i], 1, ft[l][i], c) == NODE_OPEN)
+                open |= 1u << i;
+            P->bt[i] = bst[i].t;
+        }
+        if (!open)
+            continue;
+        go[l] = open;
+        key[l] = sg_v16_min_lanes(f, open);
+        any |= 1u << l;
+    }
+    /* Farthest first (popped last); equal keys: the lower lane popped first. */
+    int kids[W], n = 0;
+    for (unsigned ml = any; ml; ml &= ml - 1) {
+        const int l = __builtin_ctz(ml);
+        int j = n++;
+        while (j > 0 && key[kids[j - 1]] < key[l]) {
+            kids[j] = kids[j - 1];
+            --j;
+        }
+        kids[j] = l;
+    }
+    for (int j = 0; j < n; ++j) {
+        const int l = kids[j];
+        pentry *e = &out[j];
+        memcpy(e->t, ft[l], sizeof e->t);
+        e->key = key[l];
+        e->id = cb * (uint32_t)W + (uint32_t)l;
+        e->lanes = go[l];
+        prefetch_visit(h, B->child[l]);
+    }
+    return n;
+}
+#endif
+
+/* Packets of a few rays test a bundle ray by ray (8 nodes a test) and a
+ * leaf ray by ray (4 triangles a test), fuller ones node by node and
+ * triangle by triangle across the rays (16 rays a test, whatever how many
+ * are in). Across costs about 8 rays' worth per bundle or leaf: measured
+ * (1 thread, best of 3, paired) 8 gave 0.92x the frame time of 4, and 12
+ * the same as 8. */
+enum { SPARSE_LANES = 8 };
+
+static inline int push_packet(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
+                              unsigned lanes, pentry *out, counters *c)
+{
+#if SG_BUNDLE_SIMD16
+    if (__builtin_popcount(lanes) > SPARSE_LANES)
+        return push_children16(h, cb, r, bst, P, floor, lanes, out, c);
+#endif
+    return push_children4(h, cb, r, bst, P, floor, lanes, out, c);
+}
+
 /* 1 when rays a and b gather a triangle's vertices alike (sg_tri4_gather
  * reads the origin and the axis permutation only). */
 static int same_gather(const sg_tri_ray *a, const sg_tri_ray *b)
@@ -656,45 +791,163 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
     }
 }
 
-static void trace_stack4(const sg_hybrid *h, const tray *r, best *bst, unsigned lanes, counters *c)
+#if SG_V16_SIMD
+/* test_leaf4 across the rays: the rays that gather like the packet's first
+ * (one origin and axis order: camera rays) test each triangle in one
+ * sg_tri_intersect16, against their own bests, and take its crossings in
+ * leaf order as test_leaf does (each ray's triangles in the same order,
+ * each crossing kept or not by the same rule: the same hit). A ray that
+ * gathers otherwise goes through test_leaf4. */
+static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, psoa *P, unsigned lanes,
+                        counters *c)
+{
+    const int f = __builtin_ctz(lanes);
+    unsigned cls = 0;
+    for (unsigned m = lanes; m; m &= m - 1)
+        if (same_gather(&r[f].tr, &r[__builtin_ctz(m)].tr))
+            cls |= 1u << __builtin_ctz(m);
+    if (__builtin_popcount(cls) <= SPARSE_LANES)
+        cls = 0;
+    if (lanes & ~cls) {
+        test_leaf4(h, word, r, bst, lanes & ~cls, c);
+        for (unsigned m = lanes & ~cls; m; m &= m - 1)
+            P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
+    }
+    if (!cls)
+        return;
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    c->triangles += count * (uint64_t)__builtin_popcount(cls);
+#ifndef SG_HYBRID_NO_PREFETCH
+    /* every vertex of the leaf at once: their misses overlap instead of
+     * each triangle's waiting on its own */
+    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
+        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
+#endif
+    const sg_tri_ray *t0 = &r[f].tr;
+    const int k[3] = {t0->kx, t0->ky, t0->kz};
+    for (uint32_t j = first; j < first + count; ++j) {
+        const uint32_t *v = h->tri + 3 * (size_t)j;
+        const float *p0 = h->pos + 3 * (size_t)v[0], *p1 = h->pos + 3 * (size_t)v[1], *p2 = h->pos + 3 * (size_t)v[2];
+        float a[3], b[3], cc[3]; /* as sg_tri4_gather */
+        for (int q = 0; q < 3; ++q) {
+            a[q] = p0[k[q]] - t0->org[k[q]];
+            b[q] = p1[k[q]] - t0->org[k[q]];
+            cc[q] = p2[k[q]] - t0->org[k[q]];
+        }
+        sg_tri16_hit th;
+        unsigned e0;
+        const unsigned hm = sg_tri_intersect16(&P->sh, a, b, cc, cls, P->br.tmin, P->bt, &th, &e0);
+        for (unsigned m = hm | e0; m; m &= m - 1) {
+            const int i = __builtin_ctz(m);
+            if (e0 >> i & 1u) { /* an edge function exactly 0: the scalar test's double fallback */
+                sg_tri_hit one;
+                if (sg_tri_intersect(&r[i].tr, p0, p1, p2, r[i].tmin, bst[i].t, &one) &&
+                    take_hit(h, &r[i], one.t, one.b1, one.b2, one.front, j, &bst[i]))
+                    P->bt[i] = bst[i].t;
+            } else if (take_hit(h, &r[i], th.t[i], th.b1[i], th.b2[i], (int)(th.front >> i & 1u), j, &bst[i])) {
+                P->bt[i] = bst[i].t;
+            }
+        }
+    }
+}
+#endif
+
+static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, unsigned lanes, counters *c)
 {
     /* Each pop pushes at most W entries and the walk is depth first, so
      * the single ray's bound holds (invariant 3). */
     pentry stack[STACK_CAP];
-    const float root[PW] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
-    int sp = push_children4(h, 0, r, bst, root, lanes, stack, c);
+    float root[PW];
+    for (int i = 0; i < PW; ++i)
+        root[i] = -INFINITY;
+    int sp = push_packet(h, 0, r, bst, P, root, lanes, stack, c);
     while (sp > 0) {
         const pentry e = stack[--sp];
         const uint32_t k = e.id;
-        unsigned go = 0;
-        for (unsigned m = e.lanes; m; m &= m - 1) {
+        /* the rays whose floor is not beyond their best (e.t[i] > bst[i].t: pruned) */
+        unsigned go = e.lanes;
+#if SG_BUNDLE_SIMD16
+        go &= ~sg_v16_gt(sg_v16_load(e.t), sg_v16_load(P->bt));
+#else
+        for (unsigned m = e.lanes; m; m &= m - 1)
+            if (e.t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
+                go &= ~(1u << __builtin_ctz(m));
+#endif
+        /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
+        for (unsigned m = go & P->cull; m; m &= m - 1) {
             const int i = __builtin_ctz(m);
-            if (e.t[i] > bst[i].t)
-                continue;
-            /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
-            if (r[i].cull && node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
-                continue;
-            go |= 1u << i;
+            if (node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
+                go &= ~(1u << i);
         }
         if (!go)
             continue;
         c->pops++;
         const uint32_t word = h->tree.bundles[k / W].child[k % W];
-        if (sg_stree_is_leaf(word))
+        if (sg_stree_is_leaf(word)) {
+#if SG_V16_SIMD
+            test_leaf16(h, word, r, bst, P, go, c);
+#else
             test_leaf4(h, word, r, bst, go, c);
-        else
-            sp += push_children4(h, word, r, bst, e.t, go, stack + sp, c);
+            for (unsigned m = go; m; m &= m - 1)
+                P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
+#endif
+        } else {
+            sp += push_packet(h, word, r, bst, P, e.t, go, stack + sp, c);
+        }
     }
 }
 
-unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
-                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats)
+/* The packet's cone (psoa), when its rays leave one origin: the axis is
+ * their mean direction and the half-angle the widest ray's, in double,
+ * widened by 1e-3 radians (far beyond the rounding to float). */
+#if SG_BUNDLE_SIMD16
+static void packet_cone(const tray *r, unsigned lanes, psoa *P)
+{
+    const int f = __builtin_ctz(lanes);
+    double a[3] = {0.0, 0.0, 0.0};
+    P->cone = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const tray *ri = &r[__builtin_ctz(m)];
+        if (memcmp(ri->o, r[f].o, sizeof ri->o) != 0)
+            return;
+        for (int q = 0; q < 3; ++q)
+            a[q] += ri->d[q];
+    }
+    const double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (!(len > 0.0))
+        return;
+    double cmin = 1.0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const tray *ri = &r[__builtin_ctz(m)];
+        const double dl = sqrt((double)ri->d[0] * ri->d[0] + (double)ri->d[1] * ri->d[1] + (double)ri->d[2] * ri->d[2]);
+        const double c = (a[0] * ri->d[0] + a[1] * ri->d[1] + a[2] * ri->d[2]) / (len * dl);
+        cmin = c < cmin ? c : cmin;
+    }
+    /* the half-angle plus 1e-3 radians, by the angle-sum identities (no
+     * acos, sin, cos a packet) */
+    const double c0 = cmin > 1.0 ? 1.0 : cmin, s0 = sqrt(1.0 - c0 * c0);
+    const double cd = 0.9999995000000417, sd = 9.999998333333417e-4; /* cos, sin of 1e-3 */
+    const double cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
+    if (!(cw > 0.55)) /* wider than about 1 radian: the test would reject little */
+        return;
+    for (int q = 0; q < 3; ++q) {
+        P->co[q] = r[f].o[q];
+        P->ca[q] = (float)(a[q] / len);
+    }
+    P->csin = (float)sw;
+    P->ccos = (float)cw;
+    P->cone = 1;
+}
+#endif
+
+unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
+                               sg_hybrid_hit *hits, sg_hybrid_stats *stats)
 {
     tray r[PW];
     best bst[PW];
     counters c = {0};
     unsigned lanes = 0;
-    mask &= 15u;
+    mask &= 0xFFFFu;
     for (unsigned m = mask; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
         miss(&hits[i]);
@@ -703,9 +956,47 @@ unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned
         bst[i] = (best){.t = rays[i].tmax, .key = UINT64_MAX};
         lanes |= 1u << i;
     }
-    if (lanes)
-        trace_stack4(h, r, bst, lanes, &c);
+    if (lanes) {
+        psoa P;
+        P.cull = 0;
+        const int f = __builtin_ctz(lanes);
+        for (int i = 0; i < PW; ++i) {
+            const tray *ri = &r[lanes >> i & 1u ? i : f]; /* a ray outside: a copy, so lanes stay finite */
+            P.br.ox[i] = ri->br.o[0];
+            P.br.oy[i] = ri->br.o[1];
+            P.br.oz[i] = ri->br.o[2];
+            P.br.dx[i] = ri->br.d[0];
+            P.br.dy[i] = ri->br.d[1];
+            P.br.dz[i] = ri->br.d[2];
+            P.br.tmin[i] = ri->br.tmin;
+            P.br.lod0[i] = ri->br.lod0;
+            P.br.lod1[i] = ri->br.lod1;
+            P.bt[i] = bst[lanes >> i & 1u ? i : f].t;
+            P.sh.sx[i] = ri->tr.sx;
+            P.sh.sy[i] = ri->tr.sy;
+            P.sh.sz[i] = ri->tr.sz;
+            P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
+        }
+#if SG_BUNDLE_SIMD16
+        packet_cone(r, lanes, &P);
+#endif
+        trace_packet(h, r, bst, &P, lanes, &c);
+    }
     unsigned found = 0, lod_hits = 0;
+#ifndef SG_HYBRID_NO_PREFETCH
+    /* The hits' vertex normals and ids (write_hit) are cold: ask for all
+     * of them before the first is read. */
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const best *b = &bst[__builtin_ctz(m)];
+        if (b->key >> 32)
+            continue; /* a miss (all ones) or a node */
+        const uint32_t *v = h->tri + 3 * (size_t)b->key;
+        __builtin_prefetch(&h->tri_id[b->key]);
+        if (h->vnormal)
+            for (int q = 0; q < 3; ++q)
+                __builtin_prefetch(&h->vnormal[v[q]]);
+    }
+#endif
     for (unsigned m = lanes; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
         if (write_hit(h, &rays[i], &bst[i], &hits[i])) {
@@ -724,6 +1015,13 @@ unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned
         stats->lod_hits += lod_hits;
     }
     return found;
+}
+
+unsigned sg_hybrid_intersect4(const sg_hybrid *h, const sg_ray rays[4], unsigned mask, const sg_footprint *fp,
+                              sg_hybrid_hit hits[4], sg_hybrid_stats *stats)
+{
+    /* lanes outside mask are never read or written */
+    return sg_hybrid_intersect16(h, rays, mask & 15u, fp, hits, stats);
 }
 
 int sg_hybrid_occluded(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, sg_hybrid_stats *stats)

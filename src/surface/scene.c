@@ -794,7 +794,9 @@ static unsigned traverse4(const sg_scene *sc, const sg_ray *rays, unsigned mask,
     float inv[4][3], t0a[4] = {0, 0, 0, 0}, t1a[4] = {0, 0, 0, 0};
     sg_mls_carry carry[4];
     unsigned found = 0;
-    const float org[3] = {rays[0].org.x, rays[0].org.y, rays[0].org.z};
+    /* the shared origin from a ray of mask: the others may be unset */
+    const sg_ray *r0 = &rays[__builtin_ctz(mask)];
+    const float org[3] = {r0->org.x, r0->org.y, r0->org.z};
     const sg_kd_node *nodes = sc->tree.nodes;
     const uint32_t *leaf_first = sc->tree.leaf_first;
     for (int r = 0; r < 4; ++r) {
@@ -939,6 +941,21 @@ unsigned sg_scene_intersect4(const sg_scene *sc, const sg_ray rays[4], unsigned 
     }
     for (unsigned m = mask & ~found; m; m &= m - 1)
         hits[__builtin_ctz(m)].splat = SG_INVALID_ID;
+    return found;
+}
+
+unsigned sg_scene_intersect16(const sg_scene *sc, const sg_ray *rays, unsigned mask, sg_hit *hits,
+                              sg_ray_stats *stats)
+{
+    mask &= 0xFFFFu;
+    if (sc->hybrid) /* one walk for the sixteen (sg_hybrid_intersect16) */
+        return sg_hybrid_scene_intersect16(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, rays, mask, hits,
+                                           stats);
+    /* The others in quads: each ray gets its own hit whatever the grouping. */
+    unsigned found = 0;
+    for (int q = 0; q < 16; q += 4)
+        if (mask >> q & 15u)
+            found |= sg_scene_intersect4(sc, rays + q, mask >> q & 15u, hits + q, stats) << q;
     return found;
 }
 

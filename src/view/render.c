@@ -3,7 +3,7 @@
  * Invariants:
  *  1. pixel (x, y) is a pure function of (bake, world, camera, x, y): the
  *     value sg_bake_render gives it, whatever the tiling or threads,
- *     because sg_world_intersect4 gives each ray sg_world_intersect's hit.
+ *     because sg_world_intersect16 gives each ray sg_world_intersect's hit.
  */
 #include "view/render.h"
 
@@ -12,7 +12,7 @@
 #include "core/alloc.h"
 
 /* Tiles are the unit of work per thread (dynamic schedule), as in
- * sg_bake_render; quads are traced within them. */
+ * sg_bake_render; 4 x 4 blocks are traced within them. */
 enum { TILE = 16 };
 
 sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_frame_desc *desc, sg_image *out,
@@ -43,25 +43,29 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (int t = 0; t < tiles; ++t) {
         int x0 = (t % tiles_x) * TILE, y0 = (t / tiles_x) * TILE;
-        /* 2 x 2 quads: four camera rays from one eye, traced together. */
-        for (int y = y0; y < y0 + TILE && y < d.height; y += 2)
-            for (int x = x0; x < x0 + TILE && x < d.width; x += 2) {
-                sg_ray rays[4];
-                sg_world_hit h[4];
+        /* 4 x 4 blocks: sixteen camera rays from one eye, traced together
+         * (the hybrid walks its tree once for them, sg_hybrid_intersect16). */
+        for (int y = y0; y < y0 + TILE && y < d.height; y += 4)
+            for (int x = x0; x < x0 + TILE && x < d.width; x += 4) {
+                sg_ray rays[16];
+                sg_world_hit h[16];
                 unsigned mask = 0;
-                for (int q = 0; q < 4; ++q) {
-                    int px = x + (q & 1), py = y + (q >> 1);
+                for (int q = 0; q < 16; ++q) {
+                    int px = x + (q & 3), py = y + (q >> 2);
                     if (px >= d.width || py >= d.height)
                         continue;
                     rays[q] = sg_camera_ray(&d.camera, (float)px + 0.5f, (float)py + 0.5f, d.width, d.height);
                     mask |= 1u << q;
                 }
-                unsigned hit = sg_world_intersect4(w, rays, mask, h, NULL);
+                unsigned hit = sg_world_intersect16(w, rays, mask, h, NULL);
+                sg_vec3 wo[16], Lh[16];
+                for (unsigned m = hit; m; m &= m - 1)
+                    wo[__builtin_ctz(m)] = sg_v3_scale(rays[__builtin_ctz(m)].dir, -1.0f);
+                sg_bake_lookup16(b, w, h, wo, hit, Lh);
                 for (unsigned m = mask; m; m &= m - 1) {
                     int q = __builtin_ctz(m);
-                    sg_vec3 L = hit >> q & 1u ? sg_bake_lookup(b, w, &h[q], sg_v3_scale(rays[q].dir, -1.0f))
-                                              : sg_envmap_eval(env, rays[q].dir);
-                    size_t at = (size_t)(y + (q >> 1)) * (size_t)d.width + (size_t)(x + (q & 1));
+                    sg_vec3 L = hit >> q & 1u ? Lh[q] : sg_envmap_eval(env, rays[q].dir);
+                    size_t at = (size_t)(y + (q >> 2)) * (size_t)d.width + (size_t)(x + (q & 3));
                     float *px = img.data + 3 * at;
                     img.alpha[at] = (float)(hit >> q & 1u);
                     px[0] = L.x;

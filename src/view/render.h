@@ -7,10 +7,11 @@
  * equal to sg_bake_render's for the same bake, world and camera, bit for
  * bit (tested): the hits are sg_world_intersect's, the lookup is the
  * bake's own sg_bake_lookup. It differs in how it gets there: the pixels
- * of each 16 x 16 tile are traced as 2 x 2 quads, the four camera rays
- * sharing one kd-tree traversal per model (sg_world_intersect4):
- * measured 1.02-1.13x less CPU per frame than one ray at a time
- * (bench/bench_view_split, dragon 125k and 1M, 512 x 512).
+ * of each 16 x 16 tile are traced as 4 x 4 blocks (sg_world_intersect16):
+ * a hybrid model walks its tree once for the sixteen rays; the MLS and
+ * ISO surfaces trace them as 2 x 2 quads sharing one traversal each
+ * (measured 1.02-1.13x less CPU per frame than one ray at a time,
+ * bench/bench_view_split, dragon 125k and 1M, 512 x 512).
  * sg_bake_render stays the plain one-ray-at-a-time loop on purpose: it is
  * the reference this frame is tested against (as a scalar kernel beside a
  * SIMD one).

@@ -67,6 +67,13 @@
  *                                  BACK_ONLY; partial masks) give each ray
  *                                  its single-ray hit bit for bit, through
  *                                  the hierarchy and through sg_scene.
+ *     (kernels_agree also checks sg_bundle_test16, a node against 16
+ *     rays, against the single ray's scalar test, ray by ray.)
+ * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
+ *                                  sixteen rays (sg_hybrid_intersect16,
+ *                                  sg_scene_intersect16), with edge and
+ *                                  random masks; rays outside the mask
+ *                                  stay unwritten.
  */
 #include "test_support.h"
 
@@ -673,6 +680,68 @@ static void test_hybrid_kernels_agree(void **state)
         fail_msg("triangles: %zu of 20000 groups of 4 differ between SIMD and scalar", differ);
     assert_true(hits > 1000); /* the comparison saw hits, not only misses */
 
+#if SG_V16_SIMD
+    /* One triangle against sixteen rays of one origin and axis order
+     * (sg_tri_intersect16), each lane against sg_tri_intersect: random
+     * triangles, and integer ones met by axis rays (edge functions exactly
+     * 0: reported in exact0, never decided by the kernel); per-ray tmax. */
+    size_t tdiff = 0, thits = 0, texact = 0;
+    for (int n = 0; n < 5000; ++n) {
+        float v[3][3];
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a)
+                v[k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
+                                     : 4.0f * sg_test_rand01(&rng) - 2.0f;
+        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
+        sg_tri_ray tr[16];
+        sg_tri_shear16 sh;
+        float tmin[16], tmax[16];
+        unsigned valid = 0;
+        for (int i = 0; i < 16; ++i) {
+            sg_vec3 d = n % 4 == 0 && i < 4 ? sg_v3(0, 0, -1)
+                                           : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
+                                                                   sg_test_rand01(&rng) - 0.5f, -1));
+            tr[i] = sg_tri_ray_prepare(o, d);
+            sh.sx[i] = tr[i].sx, sh.sy[i] = tr[i].sy, sh.sz[i] = tr[i].sz;
+            tmin[i] = 0.0f;
+            tmax[i] = i % 5 == 4 ? 6.0f * sg_test_rand01(&rng) : INFINITY;
+            valid |= (unsigned)(tr[i].kx == tr[0].kx && tr[i].ky == tr[0].ky && tr[i].kz == tr[0].kz) << i;
+        }
+        const int k[3] = {tr[0].kx, tr[0].ky, tr[0].kz};
+        float a[3], b[3], c[3];
+        for (int q = 0; q < 3; ++q) {
+            a[q] = v[0][k[q]] - tr[0].org[k[q]];
+            b[q] = v[1][k[q]] - tr[0].org[k[q]];
+            c[q] = v[2][k[q]] - tr[0].org[k[q]];
+        }
+        sg_tri16_hit th;
+        unsigned e0;
+        unsigned m16 = sg_tri_intersect16(&sh, a, b, c, valid, tmin, tmax, &th, &e0);
+        texact += (size_t)__builtin_popcount(e0);
+        for (int i = 0; i < 16; ++i) {
+            if (!(valid >> i & 1u) || e0 >> i & 1u) {
+                tdiff += (m16 >> i & 1u) != 0;
+                continue;
+            }
+            sg_tri_hit one;
+            int hit = sg_tri_intersect(&tr[i], v[0], v[1], v[2], tmin[i], tmax[i], &one);
+            thits += (size_t)hit;
+            if (hit != (int)(m16 >> i & 1u) ||
+                (hit && (memcmp(&one.t, &th.t[i], 4) || memcmp(&one.b1, &th.b1[i], 4) ||
+                         memcmp(&one.b2, &th.b2[i], 4) || one.front != (int)(th.front >> i & 1u)))) {
+                if (!tdiff)
+                    print_message("triangle %d ray %d: alone %d t %.9g, in sixteen %u t %.9g\n", n, i, hit,
+                                  (double)one.t, m16 >> i & 1u, (double)th.t[i]);
+                ++tdiff;
+            }
+        }
+    }
+    print_message("triangles x 16 rays: %zu hits, %zu lanes left to the exact fallback\n", thits, texact);
+    if (tdiff)
+        fail_msg("triangles x 16 rays: %zu lanes differ from sg_tri_intersect", tdiff);
+    assert_true(thits > 1000 && texact > 100);
+#endif
+
     /* Bundles of a real hierarchy, rays with and without a footprint. */
     sg_mesh m = sphere_mesh(32, 64);
     sg_hybrid *h = build(&m, 0);
@@ -704,6 +773,56 @@ static void test_hybrid_kernels_agree(void **state)
     if (bdiff)
         fail_msg("bundles: %zu tests differ between SIMD and scalar", bdiff);
     assert_true(entered > 100 && points > 10);
+
+    /* One node against sixteen rays (sg_bundle_test16) is, per ray, the
+     * single ray's test of that lane: rays from one eye and from many,
+     * with and without footprints, finite and infinite far limits. */
+    size_t rdiff = 0, rentered = 0, rpoints = 0;
+    for (size_t bi = 0; bi < h->tree.bundle_count; ++bi) {
+        const sg_stree_bundle *B = &h->tree.bundles[bi];
+        sg_bundle_ray16 r16;
+        float tfar[16];
+        sg_bundle_ray one[16];
+        sg_vec3 eye = sg_v3_scale(random_dir(&rng), 3.0f);
+        for (int i = 0; i < 16; ++i) {
+            int l = (int)(bi + (size_t)i) % SG_STREE_WIDTH;
+            sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
+            sg_vec3 o = bi % 2 ? eye : sg_v3_scale(random_dir(&rng), 3.0f);
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(random_dir(&rng), 0.1f)));
+            one[i] = (sg_bundle_ray){.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f,
+                                     .lod0 = i % 2 ? 0.01f : 0.0f, .lod1 = i % 2 ? 0.05f : 0.0f};
+            r16.ox[i] = o.x, r16.oy[i] = o.y, r16.oz[i] = o.z;
+            r16.dx[i] = d.x, r16.dy[i] = d.y, r16.dz[i] = d.z;
+            r16.tmin[i] = 0.0f, r16.lod0[i] = one[i].lod0, r16.lod1[i] = one[i].lod1;
+            tfar[i] = i % 3 ? INFINITY : 3.0f * sg_test_rand01(&rng);
+        }
+        for (int l = 0; l < SG_STREE_WIDTH; ++l) {
+            float ta[16], tb[16], tc[SG_STREE_WIDTH];
+            unsigned la, lb;
+            unsigned ma = sg_bundle_test16(B, l, &r16, tfar, ta, &la);
+            unsigned mb = sg_bundle_test16_scalar(B, l, &r16, tfar, tb, &lb);
+            for (int i = 0; i < 16; ++i) {
+                unsigned lc;
+                unsigned mc = sg_bundle_test_scalar(B, &one[i], tfar[i], tc, &lc);
+                int hit = (int)(mc >> l & 1u);
+                if ((int)(ma >> i & 1u) != hit || (int)(mb >> i & 1u) != hit ||
+                    (hit && ((la >> i & 1u) != (lc >> l & 1u) || (lb >> i & 1u) != (lc >> l & 1u) ||
+                             memcmp(&ta[i], &tc[l], 4) != 0 || memcmp(&tb[i], &tc[l], 4) != 0))) {
+                    if (!rdiff)
+                        print_message("bundle %zu lane %d ray %d: entered %u / %u / %d, tin %.9g / %.9g / %.9g\n", bi,
+                                      l, i, ma >> i & 1u, mb >> i & 1u, hit, (double)ta[i], (double)tb[i],
+                                      (double)tc[l]);
+                    ++rdiff;
+                }
+                rentered += (size_t)hit;
+                rpoints += (size_t)(hit && (lc >> l & 1u));
+            }
+        }
+    }
+    print_message("bundles x 16 rays: %zu entered, %zu point-sized\n", rentered, rpoints);
+    if (rdiff)
+        fail_msg("bundles x 16 rays: %zu ray-node tests differ from the single ray's", rdiff);
+    assert_true(rentered > 1000 && rpoints > 10);
     sg_hybrid_destroy(h);
     sg_mesh_free(&m);
 }
@@ -1024,11 +1143,12 @@ static void test_hybrid_albedo_is_site_blend(void **state)
 
 /* ---- 16: packets ---------------------------------------------------------- */
 
-/* Up to four rays of a camera at eye looking at look, n x n pixels over a
- * 40-degree view: pixel (x, y) and its neighbours `step` pixels right and
- * down (step 1: a coherent quad; larger: scattered); random: each ray its
- * own eye and direction. */
-static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, sg_ray rays[4])
+/* side x side rays of a camera at eye looking at look, n x n pixels over a
+ * 40-degree view: pixel (x, y) and its neighbours `step` pixels apart
+ * right and down (step 1: a coherent block; larger: scattered); random:
+ * each ray its own eye and direction. */
+static void block_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, int side,
+                       sg_ray *rays)
 {
     enum { N = 64 };
     sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
@@ -1038,10 +1158,11 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
     sg_vec3 up = sg_v3_cross(rt, fw);
     const float th = tanf(20.0f * 3.14159265f / 180.0f);
     int step = kind == 0 ? 1 : 1 + (int)(16.0f * sg_test_rand01(rng));
-    int x = (int)((float)(N - step) * sg_test_rand01(rng)), y = (int)((float)(N - step) * sg_test_rand01(rng));
-    for (int r = 0; r < 4; ++r) {
-        float u = th * (2.0f * ((float)(x + (r & 1) * step) + 0.5f) / N - 1.0f);
-        float v = th * (1.0f - 2.0f * ((float)(y + (r >> 1) * step) + 0.5f) / N);
+    int span = (side - 1) * step;
+    int x = (int)((float)(N - span) * sg_test_rand01(rng)), y = (int)((float)(N - span) * sg_test_rand01(rng));
+    for (int r = 0; r < side * side; ++r) {
+        float u = th * (2.0f * ((float)(x + (r % side) * step) + 0.5f) / N - 1.0f);
+        float v = th * (1.0f - 2.0f * ((float)(y + (r / side) * step) + 0.5f) / N);
         sg_vec3 d = sg_v3_normalize(sg_v3_add(fw, sg_v3_add(sg_v3_scale(rt, u), sg_v3_scale(up, v))));
         rays[r] = (sg_ray){.org = eye, .dir = d, .tmin = 0.0f, .tmax = INFINITY, .flags = flags,
                            .spread = spread * 2.0f * th / N};
@@ -1051,6 +1172,11 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
             rays[r].dir = sg_v3_normalize(sg_v3_sub(to, rays[r].org));
         }
     }
+}
+
+static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flags, float spread, sg_ray rays[4])
+{
+    block_rays(rng, c, R, kind, flags, spread, 2, rays);
 }
 
 /* sg_hybrid_intersect4 and sg_scene_intersect4 give each ray of a packet
@@ -1137,6 +1263,102 @@ static void test_hybrid_intersect4_matches_single(void **state)
         sg_mesh_free(&meshes[mi]);
 }
 
+/* sg_hybrid_intersect16 and sg_scene_intersect16 give each ray of a 4x4
+ * block its single-ray hit, bit for bit, as intersect4_matches_single
+ * checks for quads: coherent, scattered and random blocks; full detail,
+ * LOD at 1 and 4 pixels and mixed within a block; both faces, FRONT_ONLY,
+ * BACK_ONLY; full, partial (a block on the frame's edge) and random
+ * masks; finite tmax, per ray too. Rays outside the mask are not written. */
+static void test_hybrid_intersect16_matches_single(void **state)
+{
+    (void)state;
+    sg_mesh meshes[3] = {fine_sphere(), {0}, {0}};
+    const char *names[3] = {"sphere", "bunny", "dragon"};
+    sg_error err = {0};
+    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
+        fail_msg("bunny: %s", err.message);
+    int count = 2;
+    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
+    if (path && sg_mesh_read(path, &meshes[2], &err) == SG_OK)
+        count = 3;
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const float lods[3] = {0.0f, 1.0f, 4.0f};
+    uint64_t rng = 23;
+    for (int mi = 0; mi < count; ++mi) {
+        sg_hybrid *h = build(&meshes[mi], 2);
+        sg_scene *sc = mesh_scene(&meshes[mi], 1.0f);
+        sg_hybrid_info info;
+        sg_hybrid_get_info(h, &info);
+        sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
+        float R = 0.5f * info.diagonal;
+        size_t checked = 0, hits = 0, lod_hits = 0, partly = 0;
+        for (int q = 0; q < 1500; ++q) {
+            const int kind = q % 3;
+            const uint32_t fl = flags[q / 3 % 3];
+            const float lod = lods[q / 9 % 3];
+            sg_ray rays[16];
+            block_rays(&rng, c, R, kind, fl, lod > 0.0f ? 1.0f : 0.0f, 4, rays);
+            if (q % 7 == 6) /* a finite tmax, one per ray */
+                for (int r = 0; r < 16; ++r)
+                    rays[r].tmax = 2.0f * R * sg_test_rand01(&rng);
+            sg_footprint fp[16];
+            for (int r = 0; r < 16; ++r)
+                fp[r] = (sg_footprint){0.0f, rays[r].spread, q % 11 == 10 ? lods[r % 3] : lod};
+            unsigned mask = 0xFFFFu;
+            if (q % 5 == 3)
+                mask = 0x0777u; /* a block on the frame's right and bottom edges */
+            else if (q % 5 == 4)
+                mask = 1u + (unsigned)(65534.0f * sg_test_rand01(&rng));
+            sg_hybrid_hit sixteen[16], one;
+            sg_hit ssix[16], sone;
+            for (int r = 0; r < 16; ++r) {
+                sixteen[r].t = ssix[r].t = -1.0f; /* must stay for rays outside mask */
+                ssix[r].splat = 12345u;
+            }
+            const sg_footprint *fpp = lod > 0.0f || q % 11 == 10 ? fp : NULL;
+            unsigned got = sg_hybrid_intersect16(h, rays, mask, fpp, sixteen, NULL);
+            unsigned sgot = sg_scene_intersect16(sc, rays, mask, ssix, NULL);
+            unsigned alone = 0;
+            for (int r = 0; r < 16; ++r) {
+                if (!(mask >> r & 1u)) {
+                    if (got >> r & 1u || sgot >> r & 1u || sixteen[r].t != -1.0f || ssix[r].t != -1.0f ||
+                        ssix[r].splat != 12345u)
+                        fail_msg("%s, block %d: ray %d outside mask %#x was written", names[mi], q, r, mask);
+                    continue;
+                }
+                int hs = sg_hybrid_intersect(h, &rays[r], fpp ? &fp[r] : NULL, &one, NULL);
+                alone |= (unsigned)hs << r;
+                ++checked;
+                hits += (size_t)hs;
+                lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
+                if (hs != (int)(got >> r & 1u) || (hs && !same_hit(&one, &sixteen[r])))
+                    fail_msg("%s, block %d (kind %d, flags %u, lod %g, mask %#x), ray %d: alone %d (t %.9g, "
+                             "triangle %u, node %u), in sixteen %u (t %.9g, triangle %u, node %u)",
+                             names[mi], q, kind, fl, (double)lod, mask, r, hs, (double)one.t, one.triangle,
+                             one.node, got >> r & 1u, (double)sixteen[r].t, sixteen[r].triangle, sixteen[r].node);
+                int ss = sg_scene_intersect(sc, &rays[r], &sone, NULL);
+                if (ss != (int)(sgot >> r & 1u) ||
+                    (ss && (memcmp(&sone.t, &ssix[r].t, sizeof sone.t) || memcmp(&sone.p, &ssix[r].p, sizeof sone.p) ||
+                            memcmp(&sone.n, &ssix[r].n, sizeof sone.n) || sone.splat != ssix[r].splat ||
+                            sone.leaf != ssix[r].leaf)) ||
+                    (!ss && ssix[r].splat != SG_INVALID_ID))
+                    fail_msg("%s, block %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, "
+                             "splat %u), in sixteen %u (t %.9g, splat %u)",
+                             names[mi], q, kind, fl, r, ss, (double)sone.t, sone.splat, sgot >> r & 1u,
+                             (double)ssix[r].t, ssix[r].splat);
+            }
+            partly += alone != 0 && alone != mask;
+        }
+        print_message("%s: %zu rays in blocks of 16, %zu hits (%zu LOD), %zu blocks partly hit\n", names[mi],
+                      checked, hits, lod_hits, partly);
+        assert_true(hits > checked / 5 && hits < checked * 9 / 10 && lod_hits > 100 && partly > 100);
+        sg_scene_destroy(sc);
+        sg_hybrid_destroy(h);
+    }
+    for (int mi = 0; mi < count; ++mi)
+        sg_mesh_free(&meshes[mi]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1157,6 +1379,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_sites_threads_identical),
         cmocka_unit_test(test_hybrid_albedo_is_site_blend),
         cmocka_unit_test(test_hybrid_intersect4_matches_single),
+        cmocka_unit_test(test_hybrid_intersect16_matches_single),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,5 +1,6 @@
 /* test_render.c — the viewer's frame (view/render.h) against the bake's
- * (sg_bake_render), the quad query it traces with (sg_world_intersect4)
+ * (sg_bake_render), the quad and 4x4 block queries it traces with
+ * (sg_world_intersect4, sg_world_intersect16)
  * against sg_world_intersect, and its anti-aliased still frame
  * (sg_view_render_aa: off is sg_view_render; corner supersampling gives a
  * plane's silhouette its exact coverage within the derived bound, flat
@@ -125,6 +126,61 @@ static void test_world_intersect4_matches_single(void **state)
     }
     print_message("hits: sphere %d, ground %d\n", hits[0], hits[1]);
     assert_true(hits[0] > 100 && hits[1] > 100);
+    sg_world_destroy(w);
+}
+
+/* sg_world_intersect16: each ray of a 4 x 4 block gets
+ * sg_world_intersect's hit and model, bit for bit, whether the block's
+ * rays share the models' order or split into groups (blocks across the
+ * sphere's silhouette against the ground, wide blocks), with partial
+ * masks; rays outside the mask are not written. */
+static void test_world_intersect16_matches_single(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json(SCENE);
+    uint64_t rng = 13;
+    int hits[2] = {0, 0}, split = 0;
+    for (int i = 0; i < 1500; ++i) {
+        sg_vec3 eye = sg_v3(8.0f * sg_test_rand01(&rng) - 4.0f, 0.2f + 4.0f * sg_test_rand01(&rng),
+                            8.0f * sg_test_rand01(&rng) - 4.0f);
+        sg_vec3 to = sg_v3(2.0f * sg_test_rand01(&rng) - 1.0f, 2.5f * sg_test_rand01(&rng) - 0.5f,
+                           2.0f * sg_test_rand01(&rng) - 1.0f);
+        sg_camera cam = camera(eye, to, 1.0f);
+        int res = i % 4 == 0 ? 16 : 400; /* coarse blocks span more */
+        int px = (int)(sg_test_rand01(&rng) * (float)(res - 3)), py = (int)(sg_test_rand01(&rng) * (float)(res - 3));
+        sg_ray rays[16];
+        for (int q = 0; q < 16; ++q)
+            rays[q] = sg_camera_ray(&cam, (float)(px + (q & 3)) + 0.5f, (float)(py + (q >> 2)) + 0.5f, res, res);
+        unsigned mask = i % 3 ? 0xFFFFu : 1u + (unsigned)(65534.0f * sg_test_rand01(&rng));
+        sg_world_hit h16[16], h1;
+        for (int q = 0; q < 16; ++q)
+            h16[q].model = 77u; /* must stay for rays outside mask */
+        unsigned got = sg_world_intersect16(w, rays, mask, h16, NULL);
+        int models = 0;
+        for (int q = 0; q < 16; ++q) {
+            if (!(mask >> q & 1u)) {
+                assert_int_equal(h16[q].model, 77u);
+                assert_false(got >> q & 1u);
+                continue;
+            }
+            int f = sg_world_intersect(w, &rays[q], &h1, NULL);
+            assert_int_equal(f, (int)(got >> q & 1u));
+            if (!f) {
+                assert_int_equal(h16[q].hit.splat, SG_INVALID_ID);
+                continue;
+            }
+            hits[h1.model]++;
+            models |= 1 << h1.model;
+            if (h1.model != h16[q].model || memcmp(&h1.hit.t, &h16[q].hit.t, sizeof h1.hit.t) ||
+                memcmp(&h1.hit.n, &h16[q].hit.n, sizeof h1.hit.n) || h1.hit.splat != h16[q].hit.splat ||
+                h1.hit.leaf != h16[q].hit.leaf)
+                fail_msg("block %d ray %d: model %u / %u, t %.9g / %.9g", i, q, h1.model, h16[q].model, h1.hit.t,
+                         h16[q].hit.t);
+        }
+        split += models == 3;
+    }
+    print_message("hits: sphere %d, ground %d; %d blocks hit both\n", hits[0], hits[1], split);
+    assert_true(hits[0] > 100 && hits[1] > 100 && split > 20);
     sg_world_destroy(w);
 }
 
@@ -283,6 +339,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_view_render_matches_bake_render),
         cmocka_unit_test(test_world_intersect4_matches_single),
+        cmocka_unit_test(test_world_intersect16_matches_single),
         cmocka_unit_test(test_view_render_aa_off_is_plain),
         cmocka_unit_test(test_view_render_aa_edge),
     };
