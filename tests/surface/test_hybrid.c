@@ -1179,6 +1179,69 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
     block_rays(rng, c, R, kind, flags, spread, 2, rays);
 }
 
+/* The meshes the packet tests run on: the fine sphere, the bunny and,
+ * where ../shared/data is, the 45k-triangle dragon. Returns how many. */
+static int packet_meshes(sg_mesh meshes[3])
+{
+    meshes[0] = fine_sphere();
+    meshes[1] = meshes[2] = (sg_mesh){0};
+    sg_error err = {0};
+    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
+        fail_msg("bunny: %s", err.message);
+    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
+    return path && sg_mesh_read(path, &meshes[2], &err) == SG_OK ? 3 : 2;
+}
+
+/* One packet of a packet test, for its messages. */
+typedef struct packet_case {
+    const char *mesh, *width; /* "four", "sixteen"                       */
+    int q, kind, r; /* packet, its kind, the ray in it                   */
+    uint32_t flags;
+    float lod;
+    unsigned mask;
+} packet_case;
+
+typedef struct packet_counts {
+    size_t checked, hits, lod_hits, partly;
+} packet_counts;
+
+/* Ray r of a packet against itself alone, through the hierarchy (got, in:
+ * the packet's answer) and through the scene (sgot, sin): the same hit,
+ * bit for bit. Returns whether it hits alone. */
+static int check_packet_ray(const packet_case *pc, const sg_hybrid *h, const sg_scene *sc, const sg_ray *ray,
+                            const sg_footprint *fp, unsigned got, const sg_hybrid_hit *in, unsigned sgot,
+                            const sg_hit *sin, packet_counts *n)
+{
+    sg_hybrid_hit one;
+    int hs = sg_hybrid_intersect(h, ray, fp, &one, NULL);
+    ++n->checked;
+    n->hits += (size_t)hs;
+    n->lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
+    if (hs != (int)got || (hs && !same_hit(&one, in)))
+        fail_msg("%s, packet %d (kind %d, flags %u, lod %g, mask %#x), ray %d: alone %d (t %.9g, triangle %u, "
+                 "node %u), in %s %u (t %.9g, triangle %u, node %u)",
+                 pc->mesh, pc->q, pc->kind, pc->flags, (double)pc->lod, pc->mask, pc->r, hs, (double)one.t, one.triangle,
+                 one.node, pc->width, got, (double)in->t, in->triangle, in->node);
+    sg_hit sone;
+    int ss = sg_scene_intersect(sc, ray, &sone, NULL);
+    if (ss != (int)sgot ||
+        (ss && (memcmp(&sone.t, &sin->t, sizeof sone.t) || memcmp(&sone.p, &sin->p, sizeof sone.p) ||
+                memcmp(&sone.n, &sin->n, sizeof sone.n) || sone.splat != sin->splat || sone.leaf != sin->leaf)) ||
+        (!ss && sin->splat != SG_INVALID_ID))
+        fail_msg("%s, packet %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, splat %u), "
+                 "in %s %u (t %.9g, splat %u)",
+                 pc->mesh, pc->q, pc->kind, pc->flags, pc->r, ss, (double)sone.t, sone.splat, pc->width, sgot,
+                 (double)sin->t, sin->splat);
+    return hs;
+}
+
+/* The packets covered what they should: hits and misses, LOD hits, and
+ * packets whose rays part. */
+static void check_packet_counts(const packet_counts *n)
+{
+    assert_true(n->hits > n->checked / 5 && n->hits < n->checked * 9 / 10 && n->lod_hits > 100 && n->partly > 100);
+}
+
 /* sg_hybrid_intersect4 and sg_scene_intersect4 give each ray of a packet
  * its single-ray hit, bit for bit (hybrid_trace.c "Packets"), on the fine
  * sphere, the bunny and, where ../shared/data is, the 45k-triangle dragon:
@@ -1188,15 +1251,9 @@ static void quad_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t flag
 static void test_hybrid_intersect4_matches_single(void **state)
 {
     (void)state;
-    sg_mesh meshes[3] = {fine_sphere(), {0}, {0}};
+    sg_mesh meshes[3];
     const char *names[3] = {"sphere", "bunny", "dragon"};
-    sg_error err = {0};
-    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
-        fail_msg("bunny: %s", err.message);
-    int count = 2;
-    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
-    if (path && sg_mesh_read(path, &meshes[2], &err) == SG_OK)
-        count = 3;
+    int count = packet_meshes(meshes);
     const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
     const float lods[3] = {0.0f, 1.0f, 4.0f};
     uint64_t rng = 17;
@@ -1207,7 +1264,7 @@ static void test_hybrid_intersect4_matches_single(void **state)
         sg_hybrid_get_info(h, &info);
         sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
         float R = 0.5f * info.diagonal;
-        size_t checked = 0, hits = 0, lod_hits = 0, partly = 0;
+        packet_counts n = {0};
         for (int q = 0; q < 3000; ++q) {
             const int kind = q % 3;
             const uint32_t fl = flags[q / 3 % 3];
@@ -1221,41 +1278,24 @@ static void test_hybrid_intersect4_matches_single(void **state)
             for (int r = 0; r < 4; ++r)
                 fp[r] = (sg_footprint){0.0f, rays[r].spread, q % 11 == 10 ? lods[r % 3] : lod};
             const unsigned mask = q % 5 == 4 ? 0xDu : 0xFu;
-            sg_hybrid_hit four[4], one;
+            sg_hybrid_hit four[4];
             const sg_footprint *fpp = lod > 0.0f || q % 11 == 10 ? fp : NULL;
             unsigned got = sg_hybrid_intersect4(h, rays, mask, fpp, four, NULL);
-            sg_hit sfour[4], sone;
+            sg_hit sfour[4];
             unsigned sgot = sg_scene_intersect4(sc, rays, mask, sfour, NULL);
             unsigned alone = 0;
             for (int r = 0; r < 4; ++r) {
                 if (!(mask >> r & 1u))
                     continue;
-                int hs = sg_hybrid_intersect(h, &rays[r], fpp ? &fp[r] : NULL, &one, NULL);
-                alone |= (unsigned)hs << r;
-                ++checked;
-                hits += (size_t)hs;
-                lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
-                if (hs != (int)(got >> r & 1u) || (hs && !same_hit(&one, &four[r])))
-                    fail_msg("%s, packet %d (kind %d, flags %u, lod %g), ray %d: alone %d (t %.9g, triangle %u, "
-                             "node %u), in four %u (t %.9g, triangle %u, node %u)",
-                             names[mi], q, kind, fl, (double)lod, r, hs, (double)one.t, one.triangle, one.node,
-                             got >> r & 1u, (double)four[r].t, four[r].triangle, four[r].node);
-                int ss = sg_scene_intersect(sc, &rays[r], &sone, NULL);
-                if (ss != (int)(sgot >> r & 1u) ||
-                    (ss && (memcmp(&sone.t, &sfour[r].t, sizeof sone.t) || memcmp(&sone.p, &sfour[r].p, sizeof sone.p) ||
-                            memcmp(&sone.n, &sfour[r].n, sizeof sone.n) || sone.splat != sfour[r].splat ||
-                            sone.leaf != sfour[r].leaf)) ||
-                    (!ss && sfour[r].splat != SG_INVALID_ID))
-                    fail_msg("%s, packet %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, "
-                             "splat %u), in four %u (t %.9g, splat %u)",
-                             names[mi], q, kind, fl, r, ss, (double)sone.t, sone.splat, sgot >> r & 1u,
-                             (double)sfour[r].t, sfour[r].splat);
+                packet_case pc = {names[mi], "four", q, kind, r, fl, lod, mask};
+                alone |= (unsigned)check_packet_ray(&pc, h, sc, &rays[r], fpp ? &fp[r] : NULL, got >> r & 1u,
+                                                    &four[r], sgot >> r & 1u, &sfour[r], &n) << r;
             }
-            partly += alone != 0 && alone != mask;
+            n.partly += alone != 0 && alone != mask;
         }
-        print_message("%s: %zu rays in packets, %zu hits (%zu LOD), %zu packets partly hit\n", names[mi], checked,
-                      hits, lod_hits, partly);
-        assert_true(hits > checked / 5 && hits < checked * 9 / 10 && lod_hits > 100 && partly > 100);
+        print_message("%s: %zu rays in packets, %zu hits (%zu LOD), %zu packets partly hit\n", names[mi], n.checked,
+                      n.hits, n.lod_hits, n.partly);
+        check_packet_counts(&n);
         sg_scene_destroy(sc);
         sg_hybrid_destroy(h);
     }
@@ -1272,15 +1312,9 @@ static void test_hybrid_intersect4_matches_single(void **state)
 static void test_hybrid_intersect16_matches_single(void **state)
 {
     (void)state;
-    sg_mesh meshes[3] = {fine_sphere(), {0}, {0}};
+    sg_mesh meshes[3];
     const char *names[3] = {"sphere", "bunny", "dragon"};
-    sg_error err = {0};
-    if (sg_mesh_read(SG_ASSET_DIR "/bunny.ply", &meshes[1], &err) != SG_OK)
-        fail_msg("bunny: %s", err.message);
-    int count = 2;
-    const char *path = sg_test_shared_data("meshes/stanford_dragon/dragon_vrip_res3.ply");
-    if (path && sg_mesh_read(path, &meshes[2], &err) == SG_OK)
-        count = 3;
+    int count = packet_meshes(meshes);
     const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
     const float lods[3] = {0.0f, 1.0f, 4.0f};
     uint64_t rng = 23;
@@ -1291,7 +1325,7 @@ static void test_hybrid_intersect16_matches_single(void **state)
         sg_hybrid_get_info(h, &info);
         sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
         float R = 0.5f * info.diagonal;
-        size_t checked = 0, hits = 0, lod_hits = 0, partly = 0;
+        packet_counts n = {0};
         for (int q = 0; q < 1500; ++q) {
             const int kind = q % 3;
             const uint32_t fl = flags[q / 3 % 3];
@@ -1309,8 +1343,8 @@ static void test_hybrid_intersect16_matches_single(void **state)
                 mask = 0x0777u; /* a block on the frame's right and bottom edges */
             else if (q % 5 == 4)
                 mask = 1u + (unsigned)(65534.0f * sg_test_rand01(&rng));
-            sg_hybrid_hit sixteen[16], one;
-            sg_hit ssix[16], sone;
+            sg_hybrid_hit sixteen[16];
+            sg_hit ssix[16];
             for (int r = 0; r < 16; ++r) {
                 sixteen[r].t = ssix[r].t = -1.0f; /* must stay for rays outside mask */
                 ssix[r].splat = 12345u;
@@ -1326,32 +1360,15 @@ static void test_hybrid_intersect16_matches_single(void **state)
                         fail_msg("%s, block %d: ray %d outside mask %#x was written", names[mi], q, r, mask);
                     continue;
                 }
-                int hs = sg_hybrid_intersect(h, &rays[r], fpp ? &fp[r] : NULL, &one, NULL);
-                alone |= (unsigned)hs << r;
-                ++checked;
-                hits += (size_t)hs;
-                lod_hits += (size_t)(hs && one.node != SG_INVALID_ID);
-                if (hs != (int)(got >> r & 1u) || (hs && !same_hit(&one, &sixteen[r])))
-                    fail_msg("%s, block %d (kind %d, flags %u, lod %g, mask %#x), ray %d: alone %d (t %.9g, "
-                             "triangle %u, node %u), in sixteen %u (t %.9g, triangle %u, node %u)",
-                             names[mi], q, kind, fl, (double)lod, mask, r, hs, (double)one.t, one.triangle,
-                             one.node, got >> r & 1u, (double)sixteen[r].t, sixteen[r].triangle, sixteen[r].node);
-                int ss = sg_scene_intersect(sc, &rays[r], &sone, NULL);
-                if (ss != (int)(sgot >> r & 1u) ||
-                    (ss && (memcmp(&sone.t, &ssix[r].t, sizeof sone.t) || memcmp(&sone.p, &ssix[r].p, sizeof sone.p) ||
-                            memcmp(&sone.n, &ssix[r].n, sizeof sone.n) || sone.splat != ssix[r].splat ||
-                            sone.leaf != ssix[r].leaf)) ||
-                    (!ss && ssix[r].splat != SG_INVALID_ID))
-                    fail_msg("%s, block %d (kind %d, flags %u), ray %d through the scene: alone %d (t %.9g, "
-                             "splat %u), in sixteen %u (t %.9g, splat %u)",
-                             names[mi], q, kind, fl, r, ss, (double)sone.t, sone.splat, sgot >> r & 1u,
-                             (double)ssix[r].t, ssix[r].splat);
+                packet_case pc = {names[mi], "sixteen", q, kind, r, fl, lod, mask};
+                alone |= (unsigned)check_packet_ray(&pc, h, sc, &rays[r], fpp ? &fp[r] : NULL, got >> r & 1u,
+                                                    &sixteen[r], sgot >> r & 1u, &ssix[r], &n) << r;
             }
-            partly += alone != 0 && alone != mask;
+            n.partly += alone != 0 && alone != mask;
         }
         print_message("%s: %zu rays in blocks of 16, %zu hits (%zu LOD), %zu blocks partly hit\n", names[mi],
-                      checked, hits, lod_hits, partly);
-        assert_true(hits > checked / 5 && hits < checked * 9 / 10 && lod_hits > 100 && partly > 100);
+                      n.checked, n.hits, n.lod_hits, n.partly);
+        check_packet_counts(&n);
         sg_scene_destroy(sc);
         sg_hybrid_destroy(h);
     }
