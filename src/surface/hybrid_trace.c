@@ -604,6 +604,23 @@ static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
 }
 #endif
 
+/* The children of mask `any` in push order, farthest first (popped last);
+ * equal keys: the lower lane popped first. Returns how many. */
+static inline int order_children(const float key[W], unsigned any, int kids[W])
+{
+    int n = 0;
+    for (unsigned ml = any; ml; ml &= ml - 1) {
+        const int l = __builtin_ctz(ml);
+        int j = n++;
+        while (j > 0 && key[kids[j - 1]] < key[l]) {
+            kids[j] = kids[j - 1];
+            --j;
+        }
+        kids[j] = l;
+    }
+    return n;
+}
+
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
  * decides it (disk hit, skipped, or opened). Returns how many were
@@ -648,17 +665,7 @@ static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *
             key[l] = ft[i][l] < key[l] ? ft[i][l] : key[l];
         }
     }
-    /* Farthest first (popped last); equal keys: the lower lane popped first. */
-    int kids[W], n = 0;
-    for (unsigned ml = any; ml; ml &= ml - 1) {
-        const int l = __builtin_ctz(ml);
-        int j = n++;
-        while (j > 0 && key[kids[j - 1]] < key[l]) {
-            kids[j] = kids[j - 1];
-            --j;
-        }
-        kids[j] = l;
-    }
+    int kids[W], n = order_children(key, any, kids);
     for (int j = 0; j < n; ++j) {
         const int l = kids[j];
         pentry *e = &out[j];
@@ -713,17 +720,7 @@ static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best 
         key[l] = sg_v16_min_lanes(f, open);
         any |= 1u << l;
     }
-    /* Farthest first (popped last); equal keys: the lower lane popped first. */
-    int kids[W], n = 0;
-    for (unsigned ml = any; ml; ml &= ml - 1) {
-        const int l = __builtin_ctz(ml);
-        int j = n++;
-        while (j > 0 && key[kids[j - 1]] < key[l]) {
-            kids[j] = kids[j - 1];
-            --j;
-        }
-        kids[j] = l;
-    }
+    int kids[W], n = order_children(key, any, kids);
     for (int j = 0; j < n; ++j) {
         const int l = kids[j];
         pentry *e = &out[j];
