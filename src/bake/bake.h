@@ -164,8 +164,9 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * side, sample sites with stratified rays, indirect light by the transport
  * solve; 5: the bilinear envmap lookup and its sampling (envmap.h), white
  * points for files without colours, mesh samples on the Phong-tessellated
- * surface. */
-#define SG_BAKE_ALGORITHM 5u
+ * surface; 6: sites off the surface are never sample points, and in the
+ * interpolation a refined level hides the coarser ones (samples.h). */
+#define SG_BAKE_ALGORITHM 6u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

@@ -20,10 +20,12 @@
  *    (one level finer). Decisions run in sample order after all values are
  *    known, so the set ignores the thread count.
  *  - interpolation (sg_samples_interpolate): each splat takes the
- *    normalised Wendland-C2 weighted mean of the same-facing samples whose
- *    support (support x their spacing) covers it, finer levels weighted
- *    4^level more so that a refined edge is not blurred by the coarse
- *    samples around it; the nearest sample when none covers it.
+ *    Wendland-C2 weighted linear fit of the same-facing samples whose
+ *    support (support x their spacing) covers it; where the samples of a
+ *    finer level cover the splat, the coarser levels drop out (a partition
+ *    of unity over the levels, samples.c levels_weights), so a refined
+ *    edge is not blurred by the coarse samples around it; the nearest
+ *    sample when none covers it.
  *  - nearest (sg_samples_nearest): each splat's nearest same-facing sample
  *    (glossy bins are looked up per sample, bake/glossy.h).
  * What it does not do: choose the spacing (bake.c does, from the material:

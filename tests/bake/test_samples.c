@@ -7,7 +7,9 @@
  *     within the values' noise, add none;
  *  3. interpolation reproduces a constant exactly (weights normalised), a
  *     linear function of position too (the tangent-plane fit), and a step
- *     stays a step away from it (no blur beyond the support);
+ *     stays a step away from it (no blur beyond the support), and once
+ *     refined, the coarse samples across it no longer reach the refined
+ *     zone;
  *  4. nearest: each splat's sample is its nearest same-facing one.
  * The models are the builtin sphere and ground (render/world.h). */
 #include "test_support.h"
@@ -204,6 +206,54 @@ static void test_samples_interpolate(void **state)
     thinned_free(&t);
 }
 
+/* Where a step was refined, the coarse samples across it hardly reach the
+ * refined zone any more (samples.c levels_weights): a step of 2 against
+ * 0.2 at x = 0, level-0 samples at s, one refinement at s/2 along the
+ * step. On the dark side from 0.5 s to 1.5 s from the step, the bright
+ * side's share of the interpolated value (the leak, (value - 0.2) / 1.8)
+ * averages 0.0021 with the levels' partition and 0.0149 with finer levels
+ * merely weighted 4^level more (measured, the same points); the bound
+ * 0.005 lies between. Beyond 2 s nothing leaks either way (the coarse
+ * support), which test_samples_interpolate checks without refinement. */
+static void test_samples_interpolate_refined_edge_stays_sharp(void **state)
+{
+    (void)state;
+    thinned t = thin_builtin("ground", 20000, 4.0f);
+    const sg_sites *ps = t.ps;
+    sg_sample_set *set = &t.set;
+    float s = t.s;
+    size_t n0 = set->count, added = 0;
+    float *v = sg_alloc_array(3 * ps->count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
+    assert_non_null(v);
+    assert_non_null(out);
+    for (size_t j = 0; j < n0; ++j)
+        for (int c = 0; c < 3; ++c)
+            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+    assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, set, &added, NULL), SG_OK);
+    assert_true(added > 0);
+    for (size_t j = n0; j < set->count; ++j)
+        for (int c = 0; c < 3; ++c)
+            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+    assert_int_equal(sg_samples_interpolate(ps, set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
+    size_t n = 0;
+    double leak = 0.0;
+    for (size_t i = 0; i < ps->count; ++i) {
+        float x = ps->px[i], z = ps->pz[i];
+        if (!(x >= -1.5f * s && x < -0.5f * s) || fabsf(z) > 15.0f - 3.0f * s)
+            continue;
+        ++n;
+        leak += (out[3 * i] - 0.2) / 1.8;
+    }
+    assert_true(n > 300);
+    leak /= (double)n;
+    fprintf(stderr, "refined edge: %zu splats from 0.5 s to 1.5 s, mean leak %.5f\n", n, leak);
+    if (!(leak <= 0.005))
+        fail_msg("the bright side leaks %.5f of the step into the refined zone (bound 0.005)", leak);
+    sg_free(v);
+    sg_free(out);
+    thinned_free(&t);
+}
+
 static void test_samples_nearest(void **state)
 {
     (void)state;
@@ -267,6 +317,7 @@ int main(void)
         cmocka_unit_test(test_samples_thin_spacing_coverage_determinism),
         cmocka_unit_test(test_samples_refine_follows_a_step),
         cmocka_unit_test(test_samples_interpolate),
+        cmocka_unit_test(test_samples_interpolate_refined_edge_stays_sharp),
         cmocka_unit_test(test_samples_nearest),
         cmocka_unit_test(test_samples_thin_skips_unsampled),
     };
