@@ -220,10 +220,14 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     hit->leaf = hh.slot;
     hit->b1 = hh.b1;
     hit->b2 = hh.b2;
-    uint32_t ids[1];
-    float w[1];
-    sg_hybrid_hit_sites(h, &hh, ids, w, 1);
-    hit->splat = ids[0];
+    /* The dominant site: sg_hybrid_hit_sites with max 1 (the largest
+     * clamped weight, the first in vertex order on a tie), without its
+     * sort. */
+    float w[3];
+    sg_hybrid__clamped_weights(hh.b1, hh.b2, w);
+    int k = w[1] > w[0] ? 1 : 0;
+    k = w[2] > w[k] ? 2 : k;
+    hit->splat = hh.vertex[k];
     return 1;
 }
 
@@ -294,8 +298,22 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
     if (hit->leaf < h->info.triangle_count) {
-        sg_hybrid_hit hh = triangle_hit(h, hit, 0);
-        return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
+        if (max < 3) { /* the largest first: sg_hybrid_hit_sites sorts */
+            sg_hybrid_hit hh = triangle_hit(h, hit, 0);
+            return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
+        }
+        /* The lookup's case, every pixel: sg_hybrid_hit_sites with max 3
+         * (vertex order, weights over their sum), without building the
+         * whole sg_hybrid_hit (test_hybrid scene_interface: same bits). */
+        const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
+        float w[3];
+        sg_hybrid__clamped_weights(hit->b1, hit->b2, w);
+        const float sum = w[0] + w[1] + w[2];
+        for (int k = 0; k < 3; ++k) {
+            ids[k] = v[k];
+            weights[k] = sum > 0.0f ? w[k] / sum : 1.0f / 3.0f;
+        }
+        return 3;
     }
     if (hit->splat >= s->view.count)
         return 0;
