@@ -105,6 +105,13 @@ int main(int argc, char **argv)
     if (repeat < 1)
         repeat = 1;
     double best_wall = 0.0, best_cpu = 0.0;
+    /* SG_SPLIT_DUMP=FILE: the view frames' RGB floats written one after
+     * the other to FILE (width x height x 3 each, rows top first), so two
+     * builds' frames can be compared value by value (bench/frame_diff.py). */
+    const char *dump_path = getenv("SG_SPLIT_DUMP");
+    FILE *dump = dump_path && *dump_path ? fopen(dump_path, "wb") : NULL;
+    if (dump_path && *dump_path && !dump)
+        return fprintf(stderr, "%s: cannot open for writing\n", dump_path), 1;
     if (width < 1 || height < 1 || stride < 1 || threads < 1)
         return fprintf(stderr, "bad size, stride or threads\n"), 2;
     sg_error err;
@@ -207,6 +214,9 @@ int main(int argc, char **argv)
             memcpy(&bits, &iv.data[i], sizeof bits);
             view_hash = (view_hash ^ bits) * 0x100000001b3ull;
         }
+        if (dump && fwrite(iv.data, sizeof(float) * 3, (size_t)width * (size_t)height, dump) !=
+                        (size_t)width * (size_t)height)
+            return fprintf(stderr, "%s: write failed\n", dump_path), 1;
         sg_image_free(&ib);
         sg_image_free(&iv);
         ++frames;
@@ -230,6 +240,8 @@ int main(int argc, char **argv)
     double nr = (double)rs.rays;
     printf("  per primary ray: %.1f nodes, %.2f leaves, %.2f leaf tests, %.1f splats; %.1f%% hit\n", rs.nodes / nr,
            rs.leaves / nr, rs.isects / nr, rs.splats / nr, 100.0 * rs.hits / nr);
+    if (dump && fclose(dump) != 0)
+        return fprintf(stderr, "%s: write failed\n", dump_path), 1;
     free(rgba);
     sg_display_destroy(disp);
     sg_bake_destroy(b);

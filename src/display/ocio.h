@@ -37,7 +37,9 @@
  * Layout: the input is an sg_image (image.h): RGB floats, row 0 top. The
  * 8-bit output is width * height * 4 bytes, R, G, B, A per pixel, row 0 top,
  * rows tightly packed (stride 4 * width); each channel is
- * round(255 * v), v the display-referred value in [0, 1]. The float output
+ * round(255 * v), v the display-referred value in [0, 1] (with gamma 1,
+ * OCIO's own 8-bit output from the input rounded to half floats: within 1
+ * of that, see ocio.cpp invariant 5). The float output
  * is width * height * 3 floats in the sg_image layout, each in [0, 1].
  *
  * Input sanitising, before the view: NaN and negative values become 0,

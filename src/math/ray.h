@@ -73,6 +73,10 @@ typedef struct sg_hit {
     sg_vec3 n;      /* smooth unit surface normal (the model's outward side) */
     uint32_t splat; /* splat with the largest weight at p; SG_INVALID_ID = miss */
     uint32_t leaf;  /* kd-tree leaf holding p (for sg_scene_hit_sites)  */
+    float b1, b2;   /* a hybrid triangle hit's barycentric weights of its
+                       2nd and 3rd vertex, as the triangle test found them
+                       (p is their combination); set and read for such
+                       hits only (hybrid_scene.h)                        */
 } sg_hit;
 
 /* Counters a traversal adds to (once per ray, not per step). The paper's

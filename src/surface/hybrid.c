@@ -362,12 +362,8 @@ int sg_hybrid_hit_sites(const sg_hybrid *h, const sg_hybrid_hit *hit, uint32_t *
     }
     if (hit->triangle == SG_INVALID_ID)
         return 0;
-    float w[3] = {1.0f - hit->b1 - hit->b2, hit->b1, hit->b2};
-    float sum = 0.0f;
-    for (int k = 0; k < 3; ++k) {
-        w[k] = w[k] < 0.0f ? 0.0f : (w[k] > 1.0f ? 1.0f : w[k]);
-        sum += w[k];
-    }
+    float w[3], sum;
+    sg_hybrid__clamped_weights(hit->b1, hit->b2, w);
     int order[3] = {0, 1, 2};
     if (max < 3) /* largest first; ties keep vertex order */
         for (int i = 1; i < 3; ++i)

@@ -35,4 +35,17 @@ struct sg_hybrid {
                               (scene_store.c); destroy frees the struct only */
 };
 
+/* A triangle hit's three vertex weights from its barycentrics (b1, b2):
+ * each clamped to [0, 1], in vertex order. sg_hybrid_hit_sites and the
+ * scene's lookup path (hybrid_scene.c) both start here, so their weights
+ * are the same bits. */
+static inline void sg_hybrid__clamped_weights(float b1, float b2, float w[3])
+{
+    w[0] = 1.0f - b1 - b2;
+    w[1] = b1;
+    w[2] = b2;
+    for (int k = 0; k < 3; ++k)
+        w[k] = w[k] < 0.0f ? 0.0f : (w[k] > 1.0f ? 1.0f : w[k]);
+}
+
 #endif

@@ -210,6 +210,7 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
         hit->n = hh.ns;
         hit->splat = (uint32_t)(s->vertex_count + hh.node);
         hit->leaf = SG_INVALID_ID;
+        hit->b1 = hit->b2 = 0.0f;
         return 1;
     }
     /* The side the ray met is the geometric normal's; a shading normal
@@ -217,10 +218,16 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     float dg = sg_v3_dot(ray->dir, hh.ng), ds = sg_v3_dot(ray->dir, hh.ns);
     hit->n = (dg < 0.0f) == (ds < 0.0f) && ds != 0.0f ? hh.ns : hh.ng;
     hit->leaf = hh.slot;
-    uint32_t ids[1];
-    float w[1];
-    sg_hybrid_hit_sites(h, &hh, ids, w, 1);
-    hit->splat = ids[0];
+    hit->b1 = hh.b1;
+    hit->b2 = hh.b2;
+    /* The dominant site: sg_hybrid_hit_sites with max 1 (the largest
+     * clamped weight, the first in vertex order on a tie), without its
+     * sort. */
+    float w[3];
+    sg_hybrid__clamped_weights(hh.b1, hh.b2, w);
+    int k = w[1] > w[0] ? 1 : 0;
+    k = w[2] > w[k] ? 2 : k;
+    hit->splat = hh.vertex[k];
     return 1;
 }
 
@@ -268,35 +275,18 @@ int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, s
     return found;
 }
 
-/* The triangle hit behind an sg_hit (invariant 2): vertices and
- * barycentrics of p, in double; the geometric normal only when
- * with_normal (the lookup's weights do not read it: a square root and a
- * division less a pixel, twice with the albedo). */
+/* The triangle hit behind an sg_hit (invariant 2): vertices, and the
+ * barycentrics the triangle test found (the hit carries them); the
+ * geometric normal only when with_normal (the lookup's weights do not
+ * read it: a square root and a division less a pixel). */
 static sg_hybrid_hit triangle_hit(const sg_hybrid *h, const sg_hit *hit, int with_normal)
 {
     sg_hybrid_hit hh = {.t = hit->t, .p = hit->p, .node = SG_INVALID_ID, .slot = hit->leaf};
     const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
     hh.triangle = h->tri_id[hit->leaf];
     memcpy(hh.vertex, v, sizeof hh.vertex);
-    const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
-    const double p[3] = {hit->p.x, hit->p.y, hit->p.z};
-    double e1[3], e2[3], w[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = (double)b[k] - a[k];
-        e2[k] = (double)c[k] - a[k];
-        w[k] = p[k] - a[k];
-    }
-    double d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0;
-    for (int k = 0; k < 3; ++k) {
-        d00 += e1[k] * e1[k];
-        d01 += e1[k] * e2[k];
-        d11 += e2[k] * e2[k];
-        d20 += w[k] * e1[k];
-        d21 += w[k] * e2[k];
-    }
-    double den = d00 * d11 - d01 * d01; /* > 0: traced triangles have area (hybrid_int.h invariant 1) */
-    hh.b1 = (float)((d11 * d20 - d01 * d21) / den);
-    hh.b2 = (float)((d00 * d21 - d01 * d20) / den);
+    hh.b1 = hit->b1;
+    hh.b2 = hit->b2;
     hh.ng = with_normal ? tri_normal(h, hit->leaf) : sg_v3(0.0f, 0.0f, 0.0f);
     hh.ns = hit->n;
     return hh;
@@ -308,8 +298,22 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
     if (hit->leaf < h->info.triangle_count) {
-        sg_hybrid_hit hh = triangle_hit(h, hit, 0);
-        return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
+        if (max < 3) { /* the largest first: sg_hybrid_hit_sites sorts */
+            sg_hybrid_hit hh = triangle_hit(h, hit, 0);
+            return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
+        }
+        /* The lookup's case, every pixel: sg_hybrid_hit_sites with max 3
+         * (vertex order, weights over their sum), without building the
+         * whole sg_hybrid_hit (test_hybrid scene_interface: same bits). */
+        const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
+        float w[3];
+        sg_hybrid__clamped_weights(hit->b1, hit->b2, w);
+        const float sum = w[0] + w[1] + w[2];
+        for (int k = 0; k < 3; ++k) {
+            ids[k] = v[k];
+            weights[k] = sum > 0.0f ? w[k] / sum : 1.0f / 3.0f;
+        }
+        return 3;
     }
     if (hit->splat >= s->view.count)
         return 0;

@@ -14,10 +14,12 @@
  *          geometric normal where the two disagree about the side the ray
  *          meets (grazing rays), so the side a bake files light under is
  *          the side the ray really met.
- * sg_hit has no barycentrics: sg_hybrid_scene_hit_sites recomputes them
- * from p and the triangle (in double; p is their combination, so the
- * weights agree with the traversal's to rounding and are continuous
- * across shared edges).
+ *   b1, b2 the triangle test's barycentrics of p (p is their
+ *          combination): sg_hybrid_scene_hit_sites weights the three
+ *          vertices with them. Up to stop 24 they were recomputed from p
+ *          in double; the two differ by rounding (docs/bench_view.md,
+ *          stop 25), and on a shared edge both put ~0 on the vertex off
+ *          it, so the weights stay continuous across edges.
  *
  * Light sites: site i < vertex_count is vertex i, with its normal and a
  * reach of its longest traced edge; site vertex_count + k is node k's disk

@@ -876,16 +876,26 @@ static void test_hybrid_scene_interface(void **state)
             assert_int_equal(na, 3);
             assert_int_equal(nb, 3);
             float sum = 0.0f;
+            /* the hit carries the triangle test's barycentrics (stop 25):
+             * the scene's weights are the hierarchy's, bit for bit */
+            if (memcmp(&a.b1, &b.b1, sizeof a.b1) || memcmp(&a.b2, &b.b2, sizeof a.b2))
+                fail_msg("pixel (%d, %d): barycentrics (%.9g, %.9g) in the hit, (%.9g, %.9g) in the hierarchy", x,
+                         y, (double)a.b1, (double)a.b2, (double)b.b1, (double)b.b2);
             for (int k = 0; k < 3; ++k) {
                 assert_int_equal(ia[k], ib[k]);
-                /* recomputed from p in double: p carries float rounding
-                 * (~1e-7 of the unit sphere) over edges of ~0.025, so the
-                 * weights agree to ~1e-5 */
-                if (fabsf(wa[k] - wb[k]) > 1e-4f)
-                    fail_msg("pixel (%d, %d): weight %d is %g via the scene, %g in the hierarchy", x, y, k,
+                if (memcmp(&wa[k], &wb[k], sizeof wa[k]))
+                    fail_msg("pixel (%d, %d): weight %d is %.9g via the scene, %.9g in the hierarchy", x, y, k,
                              (double)wa[k], (double)wb[k]);
                 sum += wa[k];
             }
+            /* and they are p's: the vertices blended with them give p
+             * (float rounding of the unit sphere, ~1e-7) */
+            sg_vec3 q = sg_v3(0.0f, 0.0f, 0.0f);
+            for (int k = 0; k < 3; ++k)
+                q = sg_v3_madd(q, sg_sites_position(st, ib[k]), wa[k]);
+            if (!(sg_v3_length(sg_v3_sub(q, a.p)) < 1e-5f))
+                fail_msg("pixel (%d, %d): the weights blend the vertices to %g from p", x, y,
+                         (double)sg_v3_length(sg_v3_sub(q, a.p)));
             assert_float_equal(sum, 1.0f, 1e-6f);
             assert_int_equal(sg_scene_hit_site(sc, &a), a.splat);
             /* with a footprint: LOD hits read their node alone */
