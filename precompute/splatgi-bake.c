@@ -53,6 +53,11 @@ static const char usage[] =
     "                    glossy); 'all' or a negative X: every splat\n"
     "  --refine N        refinements of the sample points where light changes fast,\n"
     "                    0..7 (default 2)\n"
+    "  --ray-cone X      level of detail of the sample points' rays, 0..16: each ray\n"
+    "                    is a cone X times as wide as its share of the solid angle,\n"
+    "                    so the ISO and hybrid surfaces stop at coarse nodes far\n"
+    "                    away; 0: off, thin rays at full detail (default: the\n"
+    "                    scene's \"bake\": {\"ray_cone\"}, else 0; docs/hybrid.md)\n"
     "  --seed S          random seed (default 1)\n"
     "  --indirect transport|photons  the indirect light's estimator (default\n"
     "                    transport); photons: the first estimator, a photon pass\n"
@@ -106,6 +111,7 @@ typedef struct options {
     int threads;
     int resume;
     int if_stale;   /* --if-stale: keep an OUT made for this scene and these parameters */
+    int ray_cone_set; /* --ray-cone given: the scene file's "bake" key yields */
     sg_model_scene_desc model; /* the scene made for a model file      */
     const char *write_scene;   /* --write-scene                        */
     sg_prog_world world;       /* --world; --if-stale applies to it too */
@@ -285,6 +291,17 @@ static int parse_args(int argc, char **argv, options *o)
             }
             o->desc.sample_spacing = (float)x;
             ++i;
+        } else if (!strcmp(a, "--ray-cone")) {
+            char *end = NULL;
+            double x = v ? strtod(v, &end) : 0.0;
+            if (!v || !end || *end || end == v || !(x >= 0.0 && x <= SG_BAKE_RAY_CONE_MAX)) {
+                fprintf(stderr, "splatgi-bake: %s: '%s' is not a number in [0, %g]\n", a, v ? v : "",
+                        (double)SG_BAKE_RAY_CONE_MAX);
+                return 1;
+            }
+            o->desc.ray_cone = x > 0.0 ? (float)x : -1.0f; /* 0 on the command line: off */
+            o->ray_cone_set = 1;
+            ++i;
         } else if (!strcmp(a, "--glossy-res")) {
             if (!parse_u64(a, v, 4, 32, &n)) return 1;
             o->desc.glossy_res = (int)n;
@@ -417,6 +434,10 @@ static int bake_main(int argc, char **argv, sg_mpi *mpi)
         fail(err.message);
         goto done;
     }
+    if (!o.ray_cone_set && sf.bake.ray_cone >= 0.0f) { /* the scene's "bake" key */
+        o.desc.ray_cone = sf.bake.ray_cone > 0.0f ? sf.bake.ray_cone : -1.0f;
+        d = sg_bake_desc_resolve(&o.desc);
+    }
     uint64_t scene_hash = sg_scene_file_hash(&sf, SG_SCENE_HASH_BAKE);
     if (o.if_stale && !o.resume) {
         /* The header's scene and parameter hashes say whether OUT is this
@@ -506,8 +527,11 @@ static int bake_main(int argc, char **argv, sg_mpi *mpi)
                sg_photon_block_count(&d.photons), SG_PHOTON_BLOCK, d.gather.k);
     else
         printf("splatgi-bake: transport estimator: ");
-    printf("%d + %d rays per sample site, %d refinements, %d thread%s\n", d.direct_samples, d.gather_rays,
-           d.refine_levels > 0 ? d.refine_levels : 0, threads, threads == 1 ? "" : "s");
+    printf("%d + %d rays per sample site, %d refinements, ", d.direct_samples, d.gather_rays,
+           d.refine_levels > 0 ? d.refine_levels : 0);
+    if (d.ray_cone > 0.0f)
+        printf("ray cone %g, ", (double)d.ray_cone);
+    printf("%d thread%s\n", threads, threads == 1 ? "" : "s");
     sg_bake_progress at = sg_bake_job_progress(job);
     if (o.resume) {
         char name[64];

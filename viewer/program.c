@@ -224,6 +224,8 @@ sg_status sg_prog_bake_obtain(const sg_prog_bake *plan, const sg_scene_file *sf,
         bake_progress bp = {.t0 = omp_get_wtime(), .tty = isatty(STDERR_FILENO)};
         bp.last = bp.t0;
         sg_bake_desc d = {.photons = {.progress = on_photons, .progress_user = &bp}};
+        if (sf->bake.ray_cone >= 0.0f) /* the scene's "bake" key; 0 there: off */
+            d.ray_cone = sf->bake.ray_cone > 0.0f ? sf->bake.ray_cone : -1.0f;
         sg_bake *b = NULL;
         if ((st = sg_bake_create(w, &d, &b, err)) != SG_OK)
             return st;

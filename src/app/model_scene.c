@@ -135,6 +135,7 @@ sg_status sg_model_scene_make(const sg_model_scene_desc *d, sg_scene_file *out, 
 
     sf.render = (sg_scene_render){.width = d->width > 0 ? d->width : 800, .height = d->height > 0 ? d->height : 600,
                                   .spp = 64, .max_depth = 8, .seed = 1};
+    sf.bake = (sg_scene_bake){.ray_cone = -1.0f}; /* not given: the bake's default */
     sg_aabb placed = {sg_v3_add(box.lo, t), sg_v3_add(box.hi, t)};
     sg_camera cam;
     const float fov = 40.0f;

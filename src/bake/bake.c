@@ -88,6 +88,9 @@ sg_bake_desc sg_bake_desc_resolve(const sg_bake_desc *desc)
     if (d.sample_spacing < 0.0f || isnan(d.sample_spacing)) d.sample_spacing = -1.0f;
     if (d.glossy_rays <= 0) d.glossy_rays = SG_GLOSSY_DEFAULT_RAYS;
     if (d.glossy_res < 0) d.glossy_res = 0;
+    if (d.ray_cone == 0.0f) d.ray_cone = SG_BAKE_RAY_CONE_DEFAULT;
+    if (!(d.ray_cone > 0.0f) || !isfinite(d.ray_cone)) d.ray_cone = -1.0f;
+    if (d.ray_cone > SG_BAKE_RAY_CONE_MAX) d.ray_cone = SG_BAKE_RAY_CONE_MAX;
     /* With direct light computed by shadow rays, photons record only what
      * arrives after a bounce: direct light is not counted twice. */
     if (d.direct_samples > 0)
@@ -127,6 +130,12 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *desc)
     fnv_u64(&h, (uint64_t)d.indirect);
     fnv_u64(&h, (uint64_t)(int64_t)d.gather_rays);
     fnv_u64(&h, (uint64_t)(int64_t)d.refine_levels);
+    if (d.ray_cone > 0.0f) { /* off: the key of a bake made before the option */
+        uint32_t rc_bits;
+        memcpy(&rc_bits, &d.ray_cone, sizeof rc_bits);
+        fnv_u64(&h, 0x52434f4e45ull); /* "RCONE": apart from the fields before */
+        fnv_u64(&h, rc_bits);
+    }
     fnv_u64(&h, SG_BAKE_ALGORITHM); /* same parameters, other estimator: other values */
     return h ? h : 1; /* 0 means "do not check" to bake_file.h */
 }

@@ -85,7 +85,18 @@ typedef struct sg_bake_desc {
                                     the roughness (glossy.h, 4..32)          */
     int glossy_rays;             /* rays per glossy sample point; default
                                     128                                      */
+    float ray_cone;              /* level of detail of the sample sites'
+                                    rays (transport.h): each ray's cone is
+                                    this many times the width of its share
+                                    of the solid angle; 0: the default,
+                                    SG_BAKE_RAY_CONE_DEFAULT; < 0: off, thin
+                                    rays at full detail (resolved: -1)    */
 } sg_bake_desc;
+
+/* The default of sg_bake_desc.ray_cone (docs/hybrid.md, "Level of detail
+ * for the bake's rays", measures 0, 1, 2 and 4); <= 0: off. */
+#define SG_BAKE_RAY_CONE_DEFAULT 0.0f
+#define SG_BAKE_RAY_CONE_MAX 16.0f /* the largest a file or option may set */
 
 /* Figures of a bake. (Not sg_bake_info: that name is the bake file's
  * header, bake_file.h.) */

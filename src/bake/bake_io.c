@@ -6,7 +6,7 @@
  *     parameters, the irradiance or records and the ray counts: nothing
  *     timed and nothing that depends on the thread count goes in, so equal
  *     bakes are equal files (what makes resume checkable with cmp);
- *  2. META elements 1..7 and 19..22 hash (sg_bake_param_hash) to the
+ *  2. META elements 1..7, 19..22 and 24..27 hash (sg_bake_param_hash) to the
  *     header's parameter hash; load refuses a file where they do not;
  *  3. bytes from a file reach no assert: each value is range-checked and a
  *     failure is SG_ERR_CORRUPT naming the file, section, model or record;
@@ -65,16 +65,22 @@ void sg_bake_io__put_meta(uint64_t meta[SG_BAKE_META_COUNT], const sg_bake_desc 
     meta[META_INDIRECT] = (uint64_t)d->indirect;
     meta[META_GATHER_RAYS] = (uint64_t)d->gather_rays;
     meta[META_REFINE] = (uint64_t)(int64_t)d->refine_levels;
+    if (d->ray_cone > 0.0f) { /* off stays 0: the bytes of a bake made before the option */
+        uint32_t rc_bits;
+        memcpy(&rc_bits, &d->ray_cone, sizeof rc_bits);
+        meta[META_RAY_CONE] = rc_bits;
+    }
 }
 
 void sg_bake_io__describe(const sg_bake_desc *d, uint64_t block, char *buf, size_t size)
 {
     snprintf(buf, size,
              "%s, seed %" PRIu64 ", %d + %d rays per site, spacing %g, %d refinements, photons %zu, max depth %d, "
-             "rr depth %d, k %u, normal_cos %g, block %" PRIu64,
+             "rr depth %d, k %u, normal_cos %g, block %" PRIu64 ", ray cone %g",
              d->indirect == SG_BAKE_INDIRECT_PHOTONS ? "photons" : "transport", d->photons.seed, d->direct_samples,
              d->gather_rays, (double)d->sample_spacing, d->refine_levels, d->photons.count, d->photons.max_depth,
-             d->photons.rr_depth, d->gather.k, (double)d->gather.normal_cos, block);
+             d->photons.rr_depth, d->gather.k, (double)d->gather.normal_cos, block,
+             d->ray_cone > 0.0f ? (double)d->ray_cone : 0.0);
 }
 
 /* Reads and checks META (invariant 2, 3); *d gets the parameters. */
@@ -98,9 +104,11 @@ sg_status sg_bake_io__read_meta(const sg_bake_file *f, const char *path, uint64_
                             meta[META_VERSION] < META_LAYOUT ? "made before light per side and the transport solve"
                                                              : "made by a newer build");
     uint32_t cos_bits = (uint32_t)meta[META_NORMAL_COS], sp_bits = (uint32_t)meta[META_SPACING];
-    float normal_cos, spacing;
+    uint32_t rc_bits = (uint32_t)meta[META_RAY_CONE];
+    float normal_cos, spacing, ray_cone;
     memcpy(&normal_cos, &cos_bits, sizeof normal_cos);
     memcpy(&spacing, &sp_bits, sizeof spacing);
+    memcpy(&ray_cone, &rc_bits, sizeof ray_cone);
     const char *bad = NULL;
     if (meta[META_COUNT] < 1 || meta[META_COUNT] > ((uint64_t)1 << 34)) bad = "photon count";
     else if (meta[META_SEED] == 0) bad = "seed";
@@ -128,6 +136,9 @@ sg_status sg_bake_io__read_meta(const sg_bake_file *f, const char *path, uint64_
     else if ((int64_t)meta[META_REFINE] < -1 || (int64_t)meta[META_REFINE] == 0 ||
              (int64_t)meta[META_REFINE] >= SG_SAMPLES_MAX_LEVEL)
         bad = "refinement levels";
+    else if (meta[META_RAY_CONE] > UINT32_MAX ||
+             (meta[META_RAY_CONE] != 0 && !(ray_cone > 0.0f && ray_cone <= SG_BAKE_RAY_CONE_MAX)))
+        bad = "ray cone";
     if (bad)
         return sg_error_set(err, SG_ERR_CORRUPT, "%s: section META: %s is out of range", path, bad);
     *d = (sg_bake_desc){.photons = {.count = (size_t)meta[META_COUNT],
@@ -141,7 +152,8 @@ sg_status sg_bake_io__read_meta(const sg_bake_file *f, const char *path, uint64_
                         .glossy_rays = (int)meta[META_GLOSSY_RAYS],
                         .indirect = (sg_bake_indirect)meta[META_INDIRECT],
                         .gather_rays = (int)meta[META_GATHER_RAYS],
-                        .refine_levels = (int)(int64_t)meta[META_REFINE]};
+                        .refine_levels = (int)(int64_t)meta[META_REFINE],
+                        .ray_cone = meta[META_RAY_CONE] ? ray_cone : -1.0f};
     uint64_t h = 0;
     if (meta[META_BLOCK] == SG_PHOTON_BLOCK)
         h = sg_bake_param_hash(d);

@@ -81,13 +81,18 @@
  *                               24 indirect estimator (sg_bake_indirect)
  *                               25 gather rays per sample site
  *                               26 refinement levels (int64; -1 none)
- *                               27 reserved, 0
+ *                               27 ray cone (f32 bits of
+ *                                  sg_bake_desc.ray_cone; 0: off,
+ *                                  as every bake before the option)
  * Element 0 is the META layout: 4. Older layouts (2: before sample points
  * and glossy bins; 3: one irradiance per splat, before light per side and
  * the transport solve) are refused with SG_ERR_UNSUPPORTED and a message to
  * bake again: their values mean something else.
- * Elements 1..7, 19..22 and 24..26 hash to the header's parameter hash
- * (checked on load).
+ * Elements 1..7, 19..22 and 24..27 hash to the header's parameter hash
+ * (checked on load); 27 only when it is not 0, so a bake without the ray
+ * cone keeps the hash (and bytes) it had before the option. A build from
+ * before the option reads a file with a ray cone as a hash mismatch
+ * (SG_ERR_CORRUPT), never as a bake at full detail.
  *
  * Errors (messages begin with the path):
  *  SG_ERR_IO, SG_ERR_CORRUPT, SG_ERR_UNSUPPORTED  from bake_file.h, and

@@ -17,7 +17,8 @@ enum {
     META_BLOCK, META_BLOCKS, META_SHOT, META_RECORDS, META_MODELS, META_SPLATS, META_RAYS /* 6 of them */,
     META_DIRECT = META_RAYS + 6 /* direct samples per splat, as int64; -1 none */,
     META_SPACING, META_GLOSSY_RES, META_GLOSSY_RAYS, META_SAMPLES,
-    META_INDIRECT /* sg_bake_indirect */, META_GATHER_RAYS, META_REFINE /* int64; -1 none */
+    META_INDIRECT /* sg_bake_indirect */, META_GATHER_RAYS, META_REFINE /* int64; -1 none */,
+    META_RAY_CONE /* float bits of ray_cone; 0: off (an element that was 0 before the option) */
 };
 #define META_LAYOUT 4u
 

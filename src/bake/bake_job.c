@@ -614,6 +614,7 @@ static sg_status run_sites(runner *r, sg_error *err)
     j->shared_seconds += omp_get_wtime() - t0;
     sg_transport_desc td = {.env_rays = j->d.direct_samples, .cos_rays = j->d.gather_rays,
                             .seed = j->d.photons.seed ^ 0xD1EC7ull, .threads = j->d.gather.threads,
+                            .ray_cone = j->d.ray_cone,
                             .progress = on_sites, .progress_user = r};
     for (;;) {
         for (size_t m = 0; m < j->models; ++m) {

@@ -251,10 +251,39 @@ typedef struct ray_rec {
     uint8_t is_env;      /* drawn by the envmap strategy                    */
 } ray_rec;
 
+/* The cone of a site's ray (transport.h, "Level of detail").
+ *
+ * The site's N = ne + nc rays draw directions from the mixture density
+ * q(w) = ne p_e(w) + nc p_c(w) rays per steradian, so a ray at w stands
+ * for the solid angle 1/q(w) around it (the mean area of its cell among
+ * the others). A camera pixel of angular width a covers a^2 sr and
+ * sg_camera_ray gives it spread a; a ray standing for Omega sr is such a
+ * pixel of width sqrt(Omega). Its share is capped at the even share of the
+ * hemisphere, Omega <= 2 pi / N (N = 96: spread <= 0.256): where q is low
+ * (cosine rays near the horizon, p_c -> 0) a ray's cell is a thin sliver
+ * along the horizon, not a wide cone, and a grazing ray must not take
+ * coarse nodes of the surface it leaves. A uniform sky (p_e = 1/4pi) with
+ * 32 + 64 rays: q = 2.5 + 20.4 cos, spread 0.21 at the zenith, the cap
+ * beyond 51 degrees from it; a ray towards the sun (p_e ~ 1000) has
+ * spread 0.006 and the sun's shadow stays sharp.
+ *
+ * A surface takes a node of size s at distance t when s < lod spread t
+ * (hybrid.h, iso.h; lod: the scene's hybrid_lod / iso_lod, 1 pixel). */
+float sg_transport_ray_spread(const sg_transport_desc *d, float pe, float pc)
+{
+    if (!(d->ray_cone > 0.0f) || !isfinite(d->ray_cone))
+        return 0.0f;
+    float n = (float)(d->env_rays + d->cos_rays);
+    float q = (float)d->env_rays * pe + (float)d->cos_rays * pc;
+    float share = 6.28318530718f / n;
+    float omega = q > 1.0f / share ? 1.0f / q : share;
+    return d->ray_cone * sqrtf(omega);
+}
+
 /* Draws and traces ray jj of a strategy; 0 when the direction falls below
  * the side's horizon or has no density (no ray: it adds 0). */
-static int trace_ray(const sg_world *w, const sg_world_hit *self, sg_vec3 ns, sg_vec3 tb, sg_vec3 bb,
-                     const double sh[2], int is_env, int jj, ray_rec *r)
+static int trace_ray(const sg_world *w, const sg_transport_desc *d, const sg_world_hit *self, sg_vec3 ns, sg_vec3 tb,
+                     sg_vec3 bb, const double sh[2], int is_env, int jj, ray_rec *r)
 {
     const sg_envmap *env = sg_world_envmap(w);
     double u1 = sh[0] + R2_A1 * (double)jj, u2 = sh[1] + R2_A2 * (double)jj;
@@ -279,6 +308,7 @@ static int trace_ray(const sg_world *w, const sg_world_hit *self, sg_vec3 ns, sg
     sg_vec3 L = sg_envmap_eval(env, wi);
     r->L[0] = L.x, r->L[1] = L.y, r->L[2] = L.z;
     sg_ray ray = sg_world_spawn_ray(w, self, wi, INFINITY);
+    ray.spread = sg_transport_ray_spread(d, r->pe, r->pc);
     sg_world_hit h;
     r->t = 0.0f;
     if (sg_world_intersect(w, &ray, &h, NULL)) {
@@ -381,7 +411,7 @@ static void gather_site(const sg_world *w, uint32_t m, uint32_t splat, int side,
     int count = 0, inside = 1;
     for (int j = 0; j < pe + pc; ++j) {
         ray_rec *r = &rays[count];
-        if (!trace_ray(w, &self, ns, tb, bb, j < pe ? sh : sh + 2, j < pe, j < pe ? j : j - pe, r))
+        if (!trace_ray(w, d, &self, ns, tb, bb, j < pe ? sh : sh + 2, j < pe, j < pe ? j : j - pe, r))
             continue;
         inside &= r->t > 0.0f && (r->model & 1u);
         ++count;
@@ -392,9 +422,9 @@ static void gather_site(const sg_world *w, uint32_t m, uint32_t splat, int side,
         return;
     }
     for (int j = pe; j < d->env_rays; ++j)
-        count += trace_ray(w, &self, ns, tb, bb, sh, 1, j, &rays[count]);
+        count += trace_ray(w, d, &self, ns, tb, bb, sh, 1, j, &rays[count]);
     for (int j = pc; j < d->cos_rays; ++j)
-        count += trace_ray(w, &self, ns, tb, bb, sh + 2, 0, j, &rays[count]);
+        count += trace_ray(w, d, &self, ns, tb, bb, sh + 2, 0, j, &rays[count]);
     if (!finish_site(rays, count, d->env_rays, d->cos_rays, t, slot))
         t->failed = 1;
 }

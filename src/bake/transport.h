@@ -44,6 +44,14 @@
  * converges as rays and sample points grow (the error left is the
  * interpolation between sample points and the nearest-site read at y).
  *
+ * Level of detail (issues 13, 15): with desc.ray_cone > 0 each ray carries
+ * a cone (sg_ray.spread), the width of the solid angle it stands for among
+ * the site's rays times ray_cone, so the surfaces with levels of detail
+ * (ISO, hybrid) stop at coarse nodes far from the site. A ray towards a
+ * bright spot of the map (the sun), drawn densely by the envmap strategy,
+ * stands for a tiny solid angle and stays sharp. The estimator is the
+ * same; only what the rays hit changes (docs/hybrid.md measures it).
+ *
  * Determinism: random numbers are sg_rng_float(seed, key, stream, dim) with
  * key = the global index of the sample's splat (splats of models before m,
  * plus its index), so a site's rays do not depend on which other sites are
@@ -70,6 +78,12 @@ typedef struct sg_transport_desc {
     int cos_rays;     /* cosine samples per site; default 64              */
     uint64_t seed;    /* default 1                                       */
     int threads;      /* 0 = OpenMP default                              */
+    float ray_cone;   /* level of detail of the sites' rays: each ray's
+                         cone (sg_ray.spread) is ray_cone times the width
+                         of its share of the solid angle
+                         (sg_transport_ray_spread); <= 0 or not finite:
+                         thin rays at full detail, the bits of a bake
+                         without it                                      */
     /* Optional, called between blocks of sites on the calling thread:
      * done of total sites so far; nonzero cancels (SG_ERR_CANCELLED, the
      * sites already done are kept). */
@@ -100,6 +114,14 @@ void sg_site_data_free(sg_site_data *sd);
 
 /* d with every zero field replaced by its default. */
 sg_transport_desc sg_transport_desc_resolve(const sg_transport_desc *d);
+
+/* The spread (sg_ray.spread) a site's ray of d (resolved) gets: the
+ * envmap strategy's density pe and the cosine strategy's pc at its
+ * direction (per steradian). d->ray_cone times sqrt of the solid angle
+ * the ray stands for among the site's rays, 1 / (env_rays pe + cos_rays
+ * pc), at most 2 pi / (env_rays + cos_rays) (derivation: transport.c);
+ * 0 when d->ray_cone is not > 0. Pure. */
+float sg_transport_ray_spread(const sg_transport_desc *d, float pe, float pc);
 
 /* Traces the rays of the sites of samples [sd->count, set->count) of model
  * m and appends their results to sd. key_base: splats of the models before

@@ -687,15 +687,28 @@ static sg_status parse_render(const ctx *c, const cJSON *obj, const char *jp, sg
     return st;
 }
 
+/* "bake": {"ray_cone": x}. The range's top is bake.h's
+ * SG_BAKE_RAY_CONE_MAX (io does not include the bake). */
+static sg_status parse_bake(const ctx *c, const cJSON *obj, const char *jp, sg_scene_bake *b)
+{
+    static const char *const keys[] = {"ray_cone"};
+    static const range RAY_CONE = {0.0, 16.0, 0, 0};
+    sg_status st = check_object(c, obj, jp, keys, COUNT(keys));
+    if (st == SG_OK)
+        st = get_float(c, obj, jp, "ray_cone", RAY_CONE, &b->ray_cone);
+    return st;
+}
+
 /* Parses the tree into *sf (zeroed by the caller); on failure *sf holds
  * whatever was allocated, for the caller to free (invariant 2). */
 static sg_status parse_root(const ctx *c, const cJSON *root, sg_scene_file *sf)
 {
-    static const char *const keys[] = {"models", "envmap", "cameras", "render"};
+    static const char *const keys[] = {"models", "envmap", "cameras", "render", "bake"};
     sf->env = (sg_scene_env){.kind = SG_SCENE_ENV_UNIFORM, .path = NULL, .rotation_deg = 0.0f,
                              .intensity = 1.0f, .radiance = {1.0f, 1.0f, 1.0f}};
     sf->render = (sg_scene_render){.width = 512, .height = 512, .spp = 64, .max_depth = 8, .seed = 1,
                                    .threads = 0};
+    sf->bake = (sg_scene_bake){.ray_cone = -1.0f};
     sg_status st = check_object(c, root, "$", keys, COUNT(keys));
     if (st != SG_OK)
         return st;
@@ -751,6 +764,9 @@ static sg_status parse_root(const ctx *c, const cJSON *root, sg_scene_file *sf)
 
     const cJSON *render = member(root, "render");
     if (render && (st = parse_render(c, render, "$.render", &sf->render)) != SG_OK)
+        return st;
+    const cJSON *bake = member(root, "bake");
+    if (bake && (st = parse_bake(c, bake, "$.bake", &sf->bake)) != SG_OK)
         return st;
     return SG_OK;
 }

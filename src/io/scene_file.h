@@ -92,6 +92,14 @@
  *       "max_depth": 8,          path vertices after the camera [0, 1024]
  *       "seed": 1,               integer [0, 2^53]
  *       "threads": 0             [0, 4096]; 0 = OpenMP default
+ *     },
+ *     "bake": {                  options of splatgi-bake (and of a viewer's
+ *                                bake); its command line overrides them
+ *       "ray_cone": 0            [0, 16]: level of detail of the bake's
+ *                                rays, in shares of the solid angle per ray
+ *                                (bake/transport.h); 0 = off, full detail;
+ *                                absent = the bake's default. Not in the
+ *                                scene hash (the bake's parameter hash)
  *     }
  *   }
  *
@@ -198,6 +206,14 @@ typedef struct sg_scene_render {
     int threads;         /* default 0 (OpenMP default)                      */
 } sg_scene_render;
 
+/* "bake": options of the bake that the scene asks for; a program's own
+ * option (splatgi-bake --ray-cone) overrides them. Not in the scene hash:
+ * the bake's parameter hash holds them (bake.h). */
+typedef struct sg_scene_bake {
+    float ray_cone;      /* sg_bake_desc.ray_cone: >= 0 as in the file (0:
+                            off); -1: not given (the bake's default)      */
+} sg_scene_bake;
+
 typedef struct sg_scene_file {
     sg_scene_model *models;   /* model_count >= 1 entries, file order        */
     size_t model_count;
@@ -205,6 +221,7 @@ typedef struct sg_scene_file {
     sg_scene_camera *cameras; /* camera_count entries (may be 0; then NULL)  */
     size_t camera_count;
     sg_scene_render render;
+    sg_scene_bake bake;
 } sg_scene_file;
 
 /* Reads and parses the file at path. Messages begin with path. */

@@ -134,6 +134,10 @@ static cJSON *scene_json(const sg_scene_file *sf)
     cJSON_AddNumberToObject(r, "max_depth", sf->render.max_depth);
     cJSON_AddNumberToObject(r, "seed", (double)sf->render.seed);
     cJSON_AddNumberToObject(r, "threads", sf->render.threads);
+    if (sf->bake.ray_cone >= 0.0f) { /* given: kept; absent stays absent */
+        cJSON *b = cJSON_AddObjectToObject(root, "bake");
+        cJSON_AddItemToObject(b, "ray_cone", num(sf->bake.ray_cone));
+    }
     return root;
 }
 

@@ -67,8 +67,10 @@
  *    reads light and material from the node's representative leaf (the
  *    leaf nearest the plane's centre), with the leaf's trilinear weights
  *    clamped to its box, and has the plane's normal. Rays without a
- *    footprint (shadow rays, the bake's rays: spread 0) and lod = 0 always
- *    reach the leaves, bit for bit as without coarse patches.
+ *    footprint (spread 0: the reference's, and the bake's unless it sets
+ *    a ray cone, bake/transport.h) and lod = 0 always reach the leaves,
+ *    bit for bit as without coarse patches. A ray spawned on the surface
+ *    never takes the cell around its origin (it enters it at t0 = 0).
  *
  *  - Layered corners (iso_build.c corner_field): where the splats covering
  *    a corner carry layer keys (layers.h) of two or more layers more than
@@ -81,8 +83,8 @@
  * What it does not do: the keyed groups of mls.c per ray (one value per
  * corner, whichever way a ray comes) — a wall thinner than a layered leaf
  * (leaf_radii x r_min / 8) still vanishes; hit weights for interpolating splat data;
- * level of detail for secondary rays (they carry no footprint yet);
- * updates after the build.
+ * footprints for secondary rays (the caller sets sg_ray.spread: the
+ * bake's ray cone does); updates after the build.
  *
  * Compact storage (bytes stated for the benchmark's report):
  *  - corner: f as int16, q = round(f / f_scale), f_scale = max |f| / 32767

@@ -211,6 +211,67 @@ static void test_bake_io_param_hash(void **state)
             fail_msg("changing parameter %d leaves the hash", i);
 }
 
+/* The ray cone (issues 13, 15): off (0 = the default while
+ * SG_BAKE_RAY_CONE_DEFAULT is 0, or < 0) keeps the key every bake had
+ * before the option: the defaults' key and a photon bake's are the values
+ * main e5d2cfb gives (sg_bake_param_hash is integer arithmetic over the
+ * resolved fields: the same on every machine). On, each value is its own
+ * key, and a bake saved with it loads with it (META element 27), while
+ * one without it writes 0 there, as before. */
+static void test_bake_io_ray_cone_key(void **state)
+{
+    (void)state;
+    sg_bake_desc zero = {0}, off = {.ray_cone = -1.0f}, nan_cone = {.ray_cone = NAN};
+    sg_bake_desc photons = {.indirect = SG_BAKE_INDIRECT_PHOTONS, .sample_spacing = 3.0f};
+    const uint64_t main_default = 0x63938bff59e2a7d4ull, main_photons = 0xede08c9fb5db8bb5ull;
+    if (SG_BAKE_RAY_CONE_DEFAULT <= 0.0f && sg_bake_param_hash(&zero) != main_default)
+        fail_msg("default key %016llx, main's %016llx", (unsigned long long)sg_bake_param_hash(&zero),
+                 (unsigned long long)main_default);
+    assert_true(sg_bake_param_hash(&off) == main_default);
+    assert_true(sg_bake_param_hash(&nan_cone) == main_default);
+    assert_true(sg_bake_param_hash(&photons) == main_photons);
+    sg_bake_desc one = {.ray_cone = 1.0f}, two = {.ray_cone = 2.0f};
+    assert_true(sg_bake_param_hash(&one) != main_default);
+    assert_true(sg_bake_param_hash(&two) != main_default);
+    assert_true(sg_bake_param_hash(&one) != sg_bake_param_hash(&two));
+    assert_true(sg_bake_desc_resolve(&off).ray_cone == -1.0f);
+    assert_true(sg_bake_desc_resolve(&two).ray_cone == 2.0f);
+
+    sg_world *w = small_world(2000);
+    sg_bake_desc d = bake_desc(8192);
+    d.ray_cone = 2.0f;
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    const char *path = sg_test_tmp_path("cone.sgbake");
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
+    sg_bake *c = NULL;
+    if (sg_bake_load(path, w, SCENE_HASH, &c, &err) != SG_OK)
+        fail_msg("load: %s", err.message);
+    sg_bake_desc dc = sg_bake_get_desc(c);
+    assert_true(dc.ray_cone == 2.0f);
+    assert_true(sg_bake_param_hash(&dc) == sg_bake_param_hash(&d));
+    sg_bake_destroy(c);
+    sg_bake_destroy(b);
+    d.ray_cone = -1.0f;
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    assert_int_equal(sg_bake_save(b, path, SCENE_HASH, &err), SG_OK);
+    if (sg_bake_load(path, w, SCENE_HASH, &c, &err) != SG_OK)
+        fail_msg("load: %s", err.message);
+    assert_true(sg_bake_get_desc(c).ray_cone == -1.0f);
+    sg_bake_file *f = NULL;
+    assert_int_equal(sg_bake_file_open(path, SCENE_HASH, 0, &f, &err), SG_OK);
+    uint64_t meta[SG_BAKE_META_COUNT];
+    assert_int_equal(sg_bake_file_read(f, "META", meta, sizeof meta, &err), SG_OK);
+    assert_true(meta[27] == 0);
+    sg_bake_file_close(f);
+    sg_bake_destroy(c);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
 /* 2. Another scene: bake_file's message, naming the file. */
 static void test_bake_io_other_scene(void **state)
 {
@@ -781,6 +842,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bake_io_roundtrip),
         cmocka_unit_test(test_bake_io_param_hash),
+        cmocka_unit_test(test_bake_io_ray_cone_key),
         cmocka_unit_test(test_bake_io_other_scene),
         cmocka_unit_test(test_bake_io_truncated_or_corrupt),
         cmocka_unit_test(test_bake_io_splat_count_mismatch),

@@ -23,6 +23,7 @@
 #include "bake/transport.h"
 #include "core/alloc.h"
 #include "envmap/irradiance_table.h"
+#include "points/room.h"
 #include "ref/pathtrace.h"
 #include "render/world.h"
 
@@ -358,6 +359,97 @@ static void test_transport_off_surface_sites(void **state)
     sg_world_destroy(w);
 }
 
+/* 7. The rays' cones (transport.c sg_transport_ray_spread): off for
+ * ray_cone 0, < 0 or NaN; on, ray_cone sqrt(1 / (ne p_e + nc p_c)) capped
+ * at ray_cone sqrt(2 pi / (ne + nc)): for 32 + 64 rays under a uniform sky
+ * (p_e = 1/(4 pi)) at the zenith (p_c = 1/pi) sqrt(1 / (8/pi + 64/pi)) =
+ * sqrt(pi / 72) = 0.2089; near the horizon (p_c = 0.01/pi) the cap,
+ * sqrt(2 pi / 96) = 0.2558; towards a sun drawn with p_e = 1000, about
+ * sqrt(1 / 32000) = 0.00559; linear in ray_cone. */
+static void test_transport_ray_spread(void **state)
+{
+    (void)state;
+    const float pi = 3.14159265358979f;
+    sg_transport_desc d = {.env_rays = 32, .cos_rays = 64};
+    const float cones[3] = {0.0f, -1.0f, NAN};
+    for (int i = 0; i < 3; ++i) {
+        d.ray_cone = cones[i];
+        assert_true(sg_transport_ray_spread(&d, 1.0f / (4.0f * pi), 1.0f / pi) == 0.0f);
+    }
+    const struct { float cone, pe, pc, expect; } cases[] = {
+        {1.0f, 1.0f / (4.0f * pi), 1.0f / pi, sqrtf(pi / 72.0f)},
+        {1.0f, 1.0f / (4.0f * pi), 0.01f / pi, sqrtf(2.0f * pi / 96.0f)},
+        {1.0f, 1000.0f, 0.5f / pi, sqrtf(1.0f / (32000.0f + 32.0f / pi))},
+        {4.0f, 1.0f / (4.0f * pi), 1.0f / pi, 4.0f * sqrtf(pi / 72.0f)},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        d.ray_cone = cases[i].cone;
+        float got = sg_transport_ray_spread(&d, cases[i].pe, cases[i].pc);
+        if (!(fabsf(got - cases[i].expect) <= 1e-5f * cases[i].expect))
+            fail_msg("case %zu: cone %g, p_e %g, p_c %g: spread %.7g, expected %.7g", i, (double)cases[i].cone,
+                     (double)cases[i].pe, (double)cases[i].pc, (double)got, (double)cases[i].expect);
+    }
+}
+
+/* 8. The sites' rays carry the cone: on the hybrid room, the gather with
+ * ray_cone 4 meets the hierarchy's inner nodes (light sites past the
+ * vertices, hybrid.h) where the thin rays of ray_cone 0 meet vertices
+ * only; the direct light's visibility ratio barely moves (the room's
+ * faces are flat, so a node's disk lies on its triangles: the mean
+ * |ratio difference| over the lit sites is below 0.02); and 0, -1 and NaN
+ * give the same bits. */
+static void test_transport_ray_cone_reaches_nodes(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"room\",\"points\":20000,"
+                                          "\"surface\":{\"model\":\"hybrid\"}}],\"envmap\":{\"builtin\":\"sunsky\"}}");
+    const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
+    /* vertex sites come first, then node slots (hybrid_scene.h): the
+     * room's mesh as world.c builds it for 20000 points */
+    sg_mesh mesh = {0};
+    sg_room_desc rd = {.cell = sqrtf(162.0f / 20000.0f)};
+    assert_int_equal(sg_room_mesh(&rd, &mesh, NULL), SG_OK);
+    const size_t nv = mesh.vertex_count;
+    sg_mesh_free(&mesh);
+    assert_true(nv < ps->count);
+    sg_sample_set set = every_splat(ps, 300);
+    sg_site_data sd[4] = {{0}};
+    const float cones[4] = {0.0f, -1.0f, NAN, 4.0f};
+    for (int k = 0; k < 4; ++k) {
+        sg_transport_desc td = {.env_rays = 16, .cos_rays = 32, .seed = 5, .ray_cone = cones[k]};
+        assert_int_equal(sg_transport_gather(w, 0, &set, 0, &td, &sd[k], NULL), SG_OK);
+    }
+    for (int k = 1; k < 3; ++k) {
+        assert_int_equal(sd[k].hits, sd[0].hits);
+        assert_memory_equal(sd[k].ratio, sd[0].ratio, 6 * sd[0].count * sizeof(float));
+        assert_memory_equal(sd[k].hit_splat, sd[0].hit_splat, sd[0].hits * sizeof(uint32_t));
+        assert_memory_equal(sd[k].hit_k, sd[0].hit_k, sd[0].hits * sizeof(float));
+    }
+    size_t nodes0 = 0, nodes4 = 0;
+    for (size_t h = 0; h < sd[0].hits; ++h)
+        nodes0 += sd[0].hit_splat[h] >= nv;
+    for (size_t h = 0; h < sd[3].hits; ++h)
+        nodes4 += sd[3].hit_splat[h] >= nv;
+    double diff = 0.0;
+    size_t lit = 0;
+    for (size_t i = 0; i < 6 * sd[0].count; ++i)
+        if (sd[0].unshadowed[i] > 0.0f) {
+            diff += fabs((double)sd[3].ratio[i] - (double)sd[0].ratio[i]);
+            ++lit;
+        }
+    diff /= lit ? (double)lit : 1.0;
+    printf("hits %zu (thin) %zu (cone 4); on inner nodes %zu, %zu; mean |ratio difference| %.4f over %zu\n",
+           sd[0].hits, sd[3].hits, nodes0, nodes4, diff, lit);
+    if (nodes0 != 0 || nodes4 < sd[3].hits / 4 || !(diff < 0.02))
+        fail_msg("thin rays met %zu nodes (expected 0), cone 4 %zu of %zu hits (expected a quarter or more); "
+                 "ratio moved by %.4f (expected < 0.02)",
+                 nodes0, nodes4, sd[3].hits, diff);
+    for (int k = 0; k < 4; ++k)
+        sg_site_data_free(&sd[k]);
+    free_set(&set);
+    sg_world_destroy(w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -371,6 +463,8 @@ int main(void)
         cmocka_unit_test(test_transport_camera_inside_closed_model),
         cmocka_unit_test(test_transport_camera_inside_closed_model_iso),
         cmocka_unit_test(test_transport_camera_inside_closed_model_hybrid),
+        cmocka_unit_test(test_transport_ray_spread),
+        cmocka_unit_test(test_transport_ray_cone_reaches_nodes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

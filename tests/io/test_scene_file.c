@@ -316,7 +316,15 @@ static const bad_case BAD[] = {
     {"{'models': [{'builtin': 'bunny'}], 'render': {'threads': '4'}}",
      "scene.json: $.render.threads: expected an integer in [0,4096], got '4'"},
     {"{'models': [{'builtin': 'bunny'}], 'renderer': {}}",
-     "scene.json: $.renderer: unknown key (expected one of: models, envmap, cameras, render)"},
+     "scene.json: $.renderer: unknown key (expected one of: models, envmap, cameras, render, bake)"},
+    {"{'models': [{'builtin': 'bunny'}], 'bake': {'ray_cone': 17}}",
+     "scene.json: $.bake.ray_cone: expected a number in [0,16], got 17"},
+    {"{'models': [{'builtin': 'bunny'}], 'bake': {'ray_cone': -1}}",
+     "scene.json: $.bake.ray_cone: expected a number in [0,16], got -1"},
+    {"{'models': [{'builtin': 'bunny'}], 'bake': {'rays': 1}}",
+     "scene.json: $.bake.rays: unknown key (expected one of: ray_cone)"},
+    {"{'models': [{'builtin': 'bunny'}], 'bake': 2}",
+     "scene.json: $.bake: expected an object, got 2"},
 };
 
 static void test_scene_file_bad_values(void **state)
@@ -515,6 +523,35 @@ static void test_scene_file_iso_lod(void **state)
     assert_true(hash_of(text[4], SG_SCENE_HASH_BAKE) != h0);
 }
 
+/* "bake": {"ray_cone": x}: absent = -1 (the bake's default), 0 = off, a
+ * value kept as given; not in the scene hash (the bake's parameter hash
+ * holds it), and written back by sg_scene_file_write only when given. */
+static void test_scene_file_bake_ray_cone(void **state)
+{
+    (void)state;
+    const char *text[] = {"{'models': [{'path': 'a.ply'}]}", "{'models': [{'path': 'a.ply'}], 'bake': {}}",
+                          "{'models': [{'path': 'a.ply'}], 'bake': {'ray_cone': 0}}",
+                          "{'models': [{'path': 'a.ply'}], 'bake': {'ray_cone': 2.5}}"};
+    const float want[] = {-1.0f, -1.0f, 0.0f, 2.5f};
+    uint64_t h0 = hash_of(text[0], SG_SCENE_HASH_BAKE);
+    for (int i = 0; i < 4; ++i) {
+        sg_scene_file sf = parse_ok(json(text[i]));
+        if (sf.bake.ray_cone != want[i])
+            fail_msg("%s: ray_cone %g, want %g", text[i], (double)sf.bake.ray_cone, (double)want[i]);
+        const char *path = sg_test_tmp_path("cone.json");
+        sg_error err = {0};
+        if (sg_scene_file_write(&sf, path, &err) != SG_OK)
+            fail_msg("write: %s", err.message);
+        sg_scene_file back;
+        if (sg_scene_file_load(path, &back, &err) != SG_OK)
+            fail_msg("load: %s", err.message);
+        assert_true(back.bake.ray_cone == want[i]);
+        sg_scene_file_free(&back);
+        sg_scene_file_free(&sf);
+        assert_true(hash_of(text[i], SG_SCENE_HASH_BAKE) == h0);
+    }
+}
+
 /* ---- 7 ---------------------------------------------------------------- */
 
 static void assert_near3(const char *what, sg_vec3 v, float x, float y, float z)
@@ -670,6 +707,7 @@ int main(void)
         cmocka_unit_test(test_scene_file_transform),       cmocka_unit_test(test_scene_file_examples),
         cmocka_unit_test(test_scene_file_io_error),         cmocka_unit_test(test_scene_file_up_axis),
         cmocka_unit_test(test_scene_file_iso_lod),
+        cmocka_unit_test(test_scene_file_bake_ray_cone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
