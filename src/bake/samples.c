@@ -416,6 +416,22 @@ static uint32_t nearest_anywhere(lazy_tree *lt, const sg_sites *ps, const sg_sam
     return j;
 }
 
+/* Whether sample j's support reaches the site at p (normal n) and faces
+ * its way; *dp gets the offset to the sample, *q its distance in units of
+ * the sample's support radius (support x its level's spacing). */
+static int reaches(const sg_sites *ps, const sg_sample_set *set, uint32_t j, sg_vec3 p, sg_vec3 n, float s0,
+                   float support, float normal_cos, sg_vec3 *dp, float *q)
+{
+    uint32_t sj = set->splat[j];
+    float r = support * level_spacing(s0, set->level[j]);
+    *dp = sg_v3_sub(sg_sites_position(ps, sj), p);
+    float d2 = sg_v3_dot(*dp, *dp);
+    if (d2 >= r * r || sg_v3_dot(n, sg_sites_normal(ps, sj)) < normal_cos)
+        return 0;
+    *q = sqrtf(d2) / r;
+    return 1;
+}
+
 /* How much a level's samples count at a site: the finest level whose
  * supports reach it counts fully, and each coarser level only where the
  * finer ones do not cover it, as the partition
@@ -442,16 +458,12 @@ static void levels_weights(const grid *g, const sg_sites *ps, const sg_sample_se
                            double level_w[SG_SAMPLES_MAX_LEVEL + 1])
 {
     double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0};
+    sg_vec3 dp;
+    float q;
     for (int k = 0; k < 27; ++k)
-        for (uint32_t j = heads[k]; j != NONE; j = g->next[j]) {
-            uint32_t sj = set->splat[j];
-            float r = support * level_spacing(s0, set->level[j]);
-            sg_vec3 dp = sg_v3_sub(sg_sites_position(ps, sj), p);
-            float d2 = sg_v3_dot(dp, dp);
-            if (d2 >= r * r || sg_v3_dot(n, sg_sites_normal(ps, sj)) < normal_cos)
-                continue;
-            cover[set->level[j]] += wendland(sqrtf(d2) / r);
-        }
+        for (uint32_t j = heads[k]; j != NONE; j = g->next[j])
+            if (reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
+                cover[set->level[j]] += wendland(q);
     double keep = 1.0;
     for (int l = SG_SAMPLES_MAX_LEVEL; l >= 0; --l) {
         level_w[l] = keep;
@@ -508,13 +520,11 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
         levels_weights(&g, ps, set, s0, support, normal_cos, p, n, heads, level_w);
         for (int k = 0; k < 27; ++k)
             for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
-                uint32_t sj = set->splat[j];
-                float r = support * level_spacing(s0, set->level[j]);
-                sg_vec3 dp = sg_v3_sub(sg_sites_position(ps, sj), p);
-                float d2 = sg_v3_dot(dp, dp);
-                if (d2 >= r * r || sg_v3_dot(n, sg_sites_normal(ps, sj)) < normal_cos)
+                sg_vec3 dp;
+                float q;
+                if (!reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
                     continue;
-                double w = (double)wendland(sqrtf(d2) / r) * level_w[set->level[j]];
+                double w = (double)wendland(q) * level_w[set->level[j]];
                 if (!(w > 0.0))
                     continue; /* a coarser level that finer samples cover */
                 double u = sg_v3_dot(dp, t) * inv_r0, v = sg_v3_dot(dp, bt) * inv_r0;

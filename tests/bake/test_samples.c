@@ -101,6 +101,15 @@ static void test_samples_thin_spacing_coverage_determinism(void **state)
     thinned_free(&t);
 }
 
+/* values of samples [from, set->count): a step in x, 2 where x > 0 and
+ * 0.2 elsewhere (RGB alike). */
+static void step_values(const sg_sites *ps, const sg_sample_set *set, size_t from, float *v)
+{
+    for (size_t j = from; j < set->count; ++j)
+        for (int c = 0; c < 3; ++c)
+            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+}
+
 /* A step in x on the ground: refinement adds samples only near the step,
  * at half the spacing; constant values add none. */
 static void test_samples_refine_follows_a_step(void **state)
@@ -118,9 +127,7 @@ static void test_samples_refine_follows_a_step(void **state)
     size_t added = 1;
     assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, set, &added, NULL), SG_OK);
     assert_int_equal(added, 0);
-    for (size_t j = 0; j < n0; ++j)
-        for (int c = 0; c < 3; ++c)
-            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+    step_values(ps, set, 0, v);
     /* The same step within its noise (standard error 1 on a difference
      * of 1.8): not significant, not refined. */
     float *sig = sg_alloc_array(n0, sizeof *sig);
@@ -226,14 +233,10 @@ static void test_samples_interpolate_refined_edge_stays_sharp(void **state)
     float *v = sg_alloc_array(3 * ps->count, sizeof *v), *out = sg_alloc_array(3 * ps->count, sizeof *out);
     assert_non_null(v);
     assert_non_null(out);
-    for (size_t j = 0; j < n0; ++j)
-        for (int c = 0; c < 3; ++c)
-            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+    step_values(ps, set, 0, v);
     assert_int_equal(sg_samples_refine(ps, s, COS, v, NULL, 0.5f, 0, set, &added, NULL), SG_OK);
     assert_true(added > 0);
-    for (size_t j = n0; j < set->count; ++j)
-        for (int c = 0; c < 3; ++c)
-            v[3 * j + c] = ps->px[set->splat[j]] > 0.0f ? 2.0f : 0.2f;
+    step_values(ps, set, n0, v);
     assert_int_equal(sg_samples_interpolate(ps, set, s, 2.0f, COS, v, 2, out, NULL), SG_OK);
     size_t n = 0;
     double leak = 0.0;
