@@ -453,17 +453,8 @@ static int reaches(const sg_sites *ps, const sg_sample_set *set, uint32_t j, sg_
  * unity over the levels, smooth in position: no seam where a zone ends. */
 static const double FINE_COVER = 0.5;
 
-static void levels_weights(const grid *g, const sg_sites *ps, const sg_sample_set *set, float s0, float support,
-                           float normal_cos, sg_vec3 p, sg_vec3 n, const uint32_t heads[27],
-                           double level_w[SG_SAMPLES_MAX_LEVEL + 1])
+static void levels_weights(const double cover[SG_SAMPLES_MAX_LEVEL + 1], double level_w[SG_SAMPLES_MAX_LEVEL + 1])
 {
-    double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0};
-    sg_vec3 dp;
-    float q;
-    for (int k = 0; k < 27; ++k)
-        for (uint32_t j = heads[k]; j != NONE; j = g->next[j])
-            if (reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
-                cover[set->level[j]] += wendland(q);
     double keep = 1.0;
     for (int l = SG_SAMPLES_MAX_LEVEL; l >= 0; --l) {
         level_w[l] = keep;
@@ -471,6 +462,43 @@ static void levels_weights(const grid *g, const sg_sites *ps, const sg_sample_se
         keep *= a >= 1.0 ? 0.0 : 1.0 - a;
     }
 }
+
+/* A site's fit: the weighted sums of the least squares below and each
+ * channel's range. */
+typedef struct fit_sums {
+    double m[6];                             /* sums of w, wu, wv, wuu, wuv, wvv */
+    double rhs[SG_SAMPLES_MAX_CHANNELS][3];  /* per channel: sums of wf, wfu, wfv */
+    float lo[SG_SAMPLES_MAX_CHANNELS], hi[SG_SAMPLES_MAX_CHANNELS];
+} fit_sums;
+
+/* Adds sample j (values f, nc channels) at (u, v) with weight w. */
+static void fit_add(fit_sums *s, double w, double u, double v, const float *f, size_t nc)
+{
+    s->m[0] += w;
+    s->m[1] += w * u;
+    s->m[2] += w * v;
+    s->m[3] += w * u * u;
+    s->m[4] += w * u * v;
+    s->m[5] += w * v * v;
+    for (size_t c = 0; c < nc; ++c) {
+        s->rhs[c][0] += w * f[c];
+        s->rhs[c][1] += w * f[c] * u;
+        s->rhs[c][2] += w * f[c] * v;
+        s->lo[c] = fminf(s->lo[c], f[c]);
+        s->hi[c] = fmaxf(s->hi[c], f[c]);
+    }
+}
+
+/* The samples that reach a site, kept from the pass that sums the levels'
+ * cover for the pass that fits (a site sees a few dozen; more than
+ * NEAR_CAP walk the grid again: the same samples in the same order). */
+enum { NEAR_CAP = 256 };
+typedef struct near_list {
+    size_t n; /* samples that reach the site (may exceed NEAR_CAP) */
+    uint32_t j[NEAR_CAP];
+    float q[NEAR_CAP];
+    sg_vec3 dp[NEAR_CAP];
+} near_list;
 
 sg_status sg_samples_interpolate(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err)
@@ -508,41 +536,52 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
          * does, to first order. A weighted mean would pull every value
          * towards its neighbourhood's average (1.5% of the energy on a
          * unit sphere at the default spacing, measured). */
-        double m[6] = {0, 0, 0, 0, 0, 0}; /* sums of w, wu, wv, wuu, wuv, wvv */
-        double rhs[SG_SAMPLES_MAX_CHANNELS][3] = {{0}}; /* per channel: sums of wf, wfu, wfv */
-        float lo[SG_SAMPLES_MAX_CHANNELS], hi[SG_SAMPLES_MAX_CHANNELS];
+        fit_sums fs;
+        memset(fs.m, 0, sizeof fs.m);
+        memset(fs.rhs, 0, sizeof fs.rhs);
         for (size_t c = 0; c < nc; ++c) {
-            lo[c] = INFINITY;
-            hi[c] = -INFINITY;
+            fs.lo[c] = INFINITY;
+            fs.hi[c] = -INFINITY;
         }
         float inv_r0 = 1.0f / (support * s0);
-        double level_w[SG_SAMPLES_MAX_LEVEL + 1];
-        levels_weights(&g, ps, set, s0, support, normal_cos, p, n, heads, level_w);
+        double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0}, level_w[SG_SAMPLES_MAX_LEVEL + 1];
+        near_list nl;
+        nl.n = 0;
         for (int k = 0; k < 27; ++k)
             for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
                 sg_vec3 dp;
                 float q;
                 if (!reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
                     continue;
-                double w = (double)wendland(q) * level_w[set->level[j]];
-                if (!(w > 0.0))
-                    continue; /* a coarser level that finer samples cover */
-                double u = sg_v3_dot(dp, t) * inv_r0, v = sg_v3_dot(dp, bt) * inv_r0;
-                m[0] += w;
-                m[1] += w * u;
-                m[2] += w * v;
-                m[3] += w * u * u;
-                m[4] += w * u * v;
-                m[5] += w * v * v;
-                for (size_t c = 0; c < nc; ++c) {
-                    float f = values[nc * (size_t)j + c];
-                    rhs[c][0] += w * f;
-                    rhs[c][1] += w * f * u;
-                    rhs[c][2] += w * f * v;
-                    lo[c] = fminf(lo[c], f);
-                    hi[c] = fmaxf(hi[c], f);
-                }
+                cover[set->level[j]] += wendland(q);
+                if (nl.n < NEAR_CAP)
+                    nl.j[nl.n] = j, nl.q[nl.n] = q, nl.dp[nl.n] = dp;
+                ++nl.n;
             }
+        levels_weights(cover, level_w);
+        if (nl.n > NEAR_CAP) { /* walk again, in the same order */
+            nl.n = 0;
+            for (int k = 0; k < 27; ++k)
+                for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
+                    sg_vec3 dp;
+                    float q;
+                    if (!reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
+                        continue;
+                    double w = (double)wendland(q) * level_w[set->level[j]];
+                    if (w > 0.0)
+                        fit_add(&fs, w, sg_v3_dot(dp, t) * inv_r0, sg_v3_dot(dp, bt) * inv_r0, values + nc * j, nc);
+                }
+        }
+        for (size_t k = 0; k < nl.n; ++k) {
+            double w = (double)wendland(nl.q[k]) * level_w[set->level[nl.j[k]]];
+            if (!(w > 0.0))
+                continue; /* a coarser level that finer samples cover */
+            fit_add(&fs, w, sg_v3_dot(nl.dp[k], t) * inv_r0, sg_v3_dot(nl.dp[k], bt) * inv_r0,
+                    values + nc * nl.j[k], nc);
+        }
+        const double *m = fs.m;
+        float *lo = fs.lo, *hi = fs.hi;
+        double (*rhs)[3] = fs.rhs;
         if (m[0] > 0.0) {
             /* c0 by Cramer's rule; the weighted mean where the points do
              * not span the plane (a line of samples, one sample, a rim). */
