@@ -490,15 +490,45 @@ static void fit_add(fit_sums *s, double w, double u, double v, const float *f, s
 }
 
 /* The samples that reach a site, kept from the pass that sums the levels'
- * cover for the pass that fits (a site sees a few dozen; more than
- * NEAR_CAP walk the grid again: the same samples in the same order). */
-enum { NEAR_CAP = 256 };
+ * cover for the pass that fits: one walk over the grid. One per thread,
+ * grown as needed (a site sees a few dozen samples). */
 typedef struct near_list {
-    size_t n; /* samples that reach the site (may exceed NEAR_CAP) */
-    uint32_t j[NEAR_CAP];
-    float q[NEAR_CAP];
-    sg_vec3 dp[NEAR_CAP];
+    size_t n, cap;
+    uint32_t *j;
+    float *q;
+    sg_vec3 *dp;
 } near_list;
+
+static void near_free(near_list *l)
+{
+    sg_free(l->j);
+    sg_free(l->q);
+    sg_free(l->dp);
+    memset(l, 0, sizeof *l);
+}
+
+/* Appends (j, q, dp); 0 when out of memory. */
+static int near_push(near_list *l, uint32_t j, float q, sg_vec3 dp)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 64;
+        void *a = l->j, *b = l->q, *c = l->dp;
+        int ok = sg_realloc_array(&a, l->cap, cap, sizeof *l->j);
+        l->j = a;
+        ok = ok && sg_realloc_array(&b, l->cap, cap, sizeof *l->q);
+        l->q = b;
+        ok = ok && sg_realloc_array(&c, l->cap, cap, sizeof *l->dp);
+        l->dp = c;
+        if (!ok)
+            return 0;
+        l->cap = cap;
+    }
+    l->j[l->n] = j;
+    l->q[l->n] = q;
+    l->dp[l->n] = dp;
+    ++l->n;
+    return 1;
+}
 
 sg_status sg_samples_interpolate(const sg_sites *ps, const sg_sample_set *set, float s0, float support,
                                  float normal_cos, const float *values, int threads, float *out, sg_error *err)
@@ -522,44 +552,32 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
     if (!grid_of_samples(&g, ps, set, support * s0))
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the interpolation grid");
     lazy_tree lt = {0};
-    int nt = threads > 0 ? threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(nt)
-    for (size_t i = 0; i < ps->count; ++i) {
-        sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i), t, bt;
-        sg_v3_basis(n, &t, &bt);
-        uint32_t heads[27];
-        grid_around(&g, p, heads);
-        /* Weighted least squares of f = c0 + c1 u + c2 v in the splat's
-         * tangent plane (u, v in units of the level-0 support), c0 the
-         * value: exact for light that varies linearly over the surface,
-         * and on a curved surface the normal (what the light depends on)
-         * does, to first order. A weighted mean would pull every value
-         * towards its neighbourhood's average (1.5% of the energy on a
-         * unit sphere at the default spacing, measured). */
-        fit_sums fs;
-        memset(fs.m, 0, sizeof fs.m);
-        memset(fs.rhs, 0, sizeof fs.rhs);
-        for (size_t c = 0; c < nc; ++c) {
-            fs.lo[c] = INFINITY;
-            fs.hi[c] = -INFINITY;
-        }
-        float inv_r0 = 1.0f / (support * s0);
-        double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0}, level_w[SG_SAMPLES_MAX_LEVEL + 1];
-        near_list nl;
-        nl.n = 0;
-        for (int k = 0; k < 27; ++k)
-            for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
-                sg_vec3 dp;
-                float q;
-                if (!reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
-                    continue;
-                cover[set->level[j]] += wendland(q);
-                if (nl.n < NEAR_CAP)
-                    nl.j[nl.n] = j, nl.q[nl.n] = q, nl.dp[nl.n] = dp;
-                ++nl.n;
+    int nt = threads > 0 ? threads : omp_get_max_threads(), nomem = 0;
+#pragma omp parallel num_threads(nt) reduction(| : nomem)
+    {
+        near_list nl = {0};
+#pragma omp for schedule(dynamic, 1024)
+        for (size_t i = 0; i < ps->count; ++i) {
+            sg_vec3 p = sg_sites_position(ps, i), n = sg_sites_normal(ps, i), t, bt;
+            sg_v3_basis(n, &t, &bt);
+            uint32_t heads[27];
+            grid_around(&g, p, heads);
+            /* Weighted least squares of f = c0 + c1 u + c2 v in the splat's
+             * tangent plane (u, v in units of the level-0 support), c0 the
+             * value: exact for light that varies linearly over the surface,
+             * and on a curved surface the normal (what the light depends on)
+             * does, to first order. A weighted mean would pull every value
+             * towards its neighbourhood's average (1.5% of the energy on a
+             * unit sphere at the default spacing, measured). */
+            fit_sums fs;
+            memset(fs.m, 0, sizeof fs.m);
+            memset(fs.rhs, 0, sizeof fs.rhs);
+            for (size_t c = 0; c < nc; ++c) {
+                fs.lo[c] = INFINITY;
+                fs.hi[c] = -INFINITY;
             }
-        levels_weights(cover, level_w);
-        if (nl.n > NEAR_CAP) { /* walk again, in the same order */
+            float inv_r0 = 1.0f / (support * s0);
+            double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0}, level_w[SG_SAMPLES_MAX_LEVEL + 1];
             nl.n = 0;
             for (int k = 0; k < 27; ++k)
                 for (uint32_t j = heads[k]; j != NONE; j = g.next[j]) {
@@ -567,50 +585,51 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
                     float q;
                     if (!reaches(ps, set, j, p, n, s0, support, normal_cos, &dp, &q))
                         continue;
-                    double w = (double)wendland(q) * level_w[set->level[j]];
-                    if (w > 0.0)
-                        fit_add(&fs, w, sg_v3_dot(dp, t) * inv_r0, sg_v3_dot(dp, bt) * inv_r0, values + nc * j, nc);
+                    cover[set->level[j]] += wendland(q);
+                    nomem |= !near_push(&nl, j, q, dp);
                 }
-        }
-        for (size_t k = 0; k < nl.n; ++k) {
-            double w = (double)wendland(nl.q[k]) * level_w[set->level[nl.j[k]]];
-            if (!(w > 0.0))
-                continue; /* a coarser level that finer samples cover */
-            fit_add(&fs, w, sg_v3_dot(nl.dp[k], t) * inv_r0, sg_v3_dot(nl.dp[k], bt) * inv_r0,
-                    values + nc * nl.j[k], nc);
-        }
-        const double *m = fs.m;
-        float *lo = fs.lo, *hi = fs.hi;
-        double (*rhs)[3] = fs.rhs;
-        if (m[0] > 0.0) {
-            /* c0 by Cramer's rule; the weighted mean where the points do
-             * not span the plane (a line of samples, one sample, a rim). */
-            double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
-            double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
-            int fit = det > 1e-4 * a * a * a;
-            for (size_t c = 0; c < nc; ++c) {
-                double v0 = rhs[c][0] / a;
-                if (fit) {
-                    double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
-                    v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
-                }
-                /* no new extrema: a fit across a shadow edge cannot
-                 * overshoot the values it was made from */
-                float vf = (float)v0;
-                out[nc * i + c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
+            levels_weights(cover, level_w);
+            for (size_t k = 0; k < nl.n; ++k) {
+                double w = (double)wendland(nl.q[k]) * level_w[set->level[nl.j[k]]];
+                if (!(w > 0.0))
+                    continue; /* a coarser level that finer samples cover */
+                fit_add(&fs, w, sg_v3_dot(nl.dp[k], t) * inv_r0, sg_v3_dot(nl.dp[k], bt) * inv_r0,
+                        values + nc * nl.j[k], nc);
             }
-        } else {
-            uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
-            if (j == NONE)
-                j = nearest_anywhere(&lt, ps, set, i);
-            if (j != NONE) /* else out of memory, reported below */
-                memcpy(out + nc * i, values + nc * (size_t)j, nc * sizeof *out);
+            const double *m = fs.m;
+            float *lo = fs.lo, *hi = fs.hi;
+            double (*rhs)[3] = fs.rhs;
+            if (m[0] > 0.0) {
+                /* c0 by Cramer's rule; the weighted mean where the points do
+                 * not span the plane (a line of samples, one sample, a rim). */
+                double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
+                double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
+                int fit = det > 1e-4 * a * a * a;
+                for (size_t c = 0; c < nc; ++c) {
+                    double v0 = rhs[c][0] / a;
+                    if (fit) {
+                        double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
+                        v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
+                    }
+                    /* no new extrema: a fit across a shadow edge cannot
+                     * overshoot the values it was made from */
+                    float vf = (float)v0;
+                    out[nc * i + c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
+                }
+            } else {
+                uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
+                if (j == NONE)
+                    j = nearest_anywhere(&lt, ps, set, i);
+                if (j != NONE) /* else out of memory, reported below */
+                    memcpy(out + nc * i, values + nc * (size_t)j, nc * sizeof *out);
+            }
         }
+        near_free(&nl);
     }
     sg_knn_destroy(lt.tree);
     grid_free(&g);
-    if (lt.failed)
-        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the samples' kd-tree");
+    if (lt.failed || nomem)
+        return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for the interpolation");
     return SG_OK;
 }
 
