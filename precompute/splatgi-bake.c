@@ -556,7 +556,12 @@ static int bake_main(int argc, char **argv, sg_mpi *mpi)
     sg_status st = sg_bake_job_run(job, on_progress, &prog, &err);
     double t_run = omp_get_wtime() - t_run0;
     end_progress_line(&prog);
-    int stop = st == SG_ERR_CANCELLED || (st == SG_OK && interrupted);
+    /* A Ctrl-C that came during the job's last block of work finds the job
+     * done: its bake is written as usual (a checkpoint of a finished job
+     * could not be resumed, and all the work is there). */
+    int stop = st == SG_ERR_CANCELLED;
+    if (st == SG_OK && interrupted)
+        fprintf(stderr, "splatgi-bake: the bake was finished when the interrupt came; writing it\n");
     if (mpi->active && (st == SG_OK || st == SG_ERR_CANCELLED)) {
         /* A Ctrl-C after the job's last round: all ranks decide alike. */
         if (barrier(mpi, &stop, &err) != SG_OK) {

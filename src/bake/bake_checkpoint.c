@@ -40,6 +40,8 @@ static sg_status add(sg_bake_writer *w, char letter, size_t m, sg_bake_type type
 sg_status sg_bake_job_save(const sg_bake_job *j, const char *path, uint64_t scene_hash, sg_error *err)
 {
     assert(j && path && j->b);
+    if (j->stage == SG_BAKE_STAGE_DONE)
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: the bake is finished; save it, not a checkpoint", path);
     if (j->models > (SG_BAKE_MAX_SECTIONS - 16) / MODEL_SECTIONS)
         return sg_error_set(err, SG_ERR_UNSUPPORTED, "%s: %zu models; a checkpoint holds at most %u", path, j->models,
                             (SG_BAKE_MAX_SECTIONS - 16) / MODEL_SECTIONS);

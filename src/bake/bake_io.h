@@ -144,7 +144,9 @@ sg_status sg_bake_load(const char *path, const sg_world *w, uint64_t scene_hash,
 sg_status sg_bake_file_desc(const sg_bake_file *f, const char *path, sg_bake_desc *out, sg_error *err);
 
 /* Writes job j (bake_job.h), stopped or not yet run, to path atomically,
- * flagged SG_BAKE_FLAG_CHECKPOINT (sections above). */
+ * flagged SG_BAKE_FLAG_CHECKPOINT (sections above). A finished job (stage
+ * DONE) is SG_ERR_INVALID_ARG and writes nothing: its bake is to be
+ * finished and saved, and a checkpoint of it could not be resumed. */
 sg_status sg_bake_job_save(const sg_bake_job *j, const char *path, uint64_t scene_hash, sg_error *err);
 
 /* Reads a checkpoint made for scene_hash and the parameters of d (else

@@ -658,6 +658,36 @@ static void test_bake_job_resume_photons(void **state)
     check_resume_everywhere(SG_BAKE_INDIRECT_PHOTONS);
 }
 
+/* A finished job is not saved as a checkpoint (its stage, DONE, is one no
+ * load accepts): SG_ERR_INVALID_ARG, and nothing at the path. splatgi-bake
+ * once wrote such a file when a Ctrl-C came during the last block of work,
+ * and its --resume then failed ("section JOBS: stage 3"). */
+static void test_bake_io_finished_job_not_checkpointed(void **state)
+{
+    (void)state;
+    sg_world *w = job_world();
+    sg_bake_desc d = {.direct_samples = 4, .gather_rays = 4, .photons = {.progress_seconds = -1.0}};
+    sg_bake_job *j = NULL;
+    sg_error err = {0};
+    assert_int_equal(sg_bake_job_create(w, &d, &j, &err), SG_OK);
+    assert_int_equal(sg_bake_job_run(j, NULL, NULL, &err), SG_OK);
+    assert_int_equal(sg_bake_job_progress(j).stage, SG_BAKE_STAGE_DONE);
+    const char *ckpt = sg_test_tmp_path("done.ckpt");
+    remove(ckpt);
+    assert_int_equal(sg_bake_job_save(j, ckpt, SCENE_HASH, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "finished"));
+    FILE *f = fopen(ckpt, "rb");
+    if (f) {
+        fclose(f);
+        fail_msg("%s was written for a finished job", ckpt);
+    }
+    sg_bake *b = NULL;
+    assert_int_equal(sg_bake_job_finish(j, &b, &err), SG_OK);
+    sg_bake_destroy(b);
+    sg_bake_job_destroy(j);
+    sg_world_destroy(w);
+}
+
 /* A job stopped in the stage `stage` (at the call after its first one), saved. */
 static void save_stopped(const sg_world *w, const sg_bake_desc *d, sg_bake_stage stage, const char *path)
 {
@@ -855,6 +885,7 @@ int main(void)
         cmocka_unit_test(test_bake_job_resume_transport),
         cmocka_unit_test(test_bake_job_resume_photons),
         cmocka_unit_test(test_bake_io_checkpoint_checks),
+        cmocka_unit_test(test_bake_io_finished_job_not_checkpointed),
         cmocka_unit_test(test_photons_progress_and_cancel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
