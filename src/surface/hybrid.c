@@ -362,25 +362,7 @@ int sg_hybrid_hit_sites(const sg_hybrid *h, const sg_hybrid_hit *hit, uint32_t *
     }
     if (hit->triangle == SG_INVALID_ID)
         return 0;
-    float w[3], sum;
-    sg_hybrid__clamped_weights(hit->b1, hit->b2, w);
-    int order[3] = {0, 1, 2};
-    if (max < 3) /* largest first; ties keep vertex order */
-        for (int i = 1; i < 3; ++i)
-            for (int j = i; j > 0 && w[order[j]] > w[order[j - 1]]; --j) {
-                int s = order[j];
-                order[j] = order[j - 1];
-                order[j - 1] = s;
-            }
-    int n = max < 3 ? max : 3;
-    sum = 0.0f;
-    for (int i = 0; i < n; ++i)
-        sum += w[order[i]];
-    for (int i = 0; i < n; ++i) {
-        ids[i] = hit->vertex[order[i]];
-        weights[i] = sum > 0.0f ? w[order[i]] / sum : 1.0f / (float)n;
-    }
-    return n;
+    return sg_hybrid__triangle_sites(hit->vertex, hit->b1, hit->b2, ids, weights, max);
 }
 
 int sg_hybrid_hit_color(const sg_hybrid *h, const sg_hybrid_hit *hit, sg_vec3 *rgb)

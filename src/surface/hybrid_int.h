@@ -35,17 +35,36 @@ struct sg_hybrid {
                               (scene_store.c); destroy frees the struct only */
 };
 
-/* A triangle hit's three vertex weights from its barycentrics (b1, b2):
- * each clamped to [0, 1], in vertex order. sg_hybrid_hit_sites and the
- * scene's lookup path (hybrid_scene.c) both start here, so their weights
- * are the same bits. */
-static inline void sg_hybrid__clamped_weights(float b1, float b2, float w[3])
+/* The light sites of a triangle hit (hybrid.h sg_hybrid_hit_sites): the
+ * vertices v[0..2] weighted by the barycentrics (1 - b1 - b2, b1, b2),
+ * each clamped to [0, 1]. With max >= 3 all three in vertex order; with
+ * fewer, the largest first (ties keep vertex order). The weights written
+ * are over their sum (1 / n each where it is 0). Returns how many (max
+ * >= 1). sg_hybrid_hit_sites and the scene's hits (hybrid_scene.c) both
+ * come here, so their sites are the same bits. */
+static inline int sg_hybrid__triangle_sites(const uint32_t v[3], float b1, float b2, uint32_t *ids, float *weights,
+                                            int max)
 {
-    w[0] = 1.0f - b1 - b2;
-    w[1] = b1;
-    w[2] = b2;
+    float w[3] = {1.0f - b1 - b2, b1, b2};
     for (int k = 0; k < 3; ++k)
         w[k] = w[k] < 0.0f ? 0.0f : (w[k] > 1.0f ? 1.0f : w[k]);
+    int order[3] = {0, 1, 2};
+    if (max < 3)
+        for (int i = 1; i < 3; ++i)
+            for (int j = i; j > 0 && w[order[j]] > w[order[j - 1]]; --j) {
+                int t = order[j];
+                order[j] = order[j - 1];
+                order[j - 1] = t;
+            }
+    int n = max < 3 ? max : 3;
+    float sum = 0.0f;
+    for (int i = 0; i < n; ++i)
+        sum += w[order[i]];
+    for (int i = 0; i < n; ++i) {
+        ids[i] = v[order[i]];
+        weights[i] = sum > 0.0f ? w[order[i]] / sum : 1.0f / (float)n;
+    }
+    return n;
 }
 
 #endif

@@ -220,14 +220,8 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     hit->leaf = hh.slot;
     hit->b1 = hh.b1;
     hit->b2 = hh.b2;
-    /* The dominant site: sg_hybrid_hit_sites with max 1 (the largest
-     * clamped weight, the first in vertex order on a tie), without its
-     * sort. */
-    float w[3];
-    sg_hybrid__clamped_weights(hh.b1, hh.b2, w);
-    int k = w[1] > w[0] ? 1 : 0;
-    k = w[2] > w[k] ? 2 : k;
-    hit->splat = hh.vertex[k];
+    float w; /* the dominant site: the largest weight */
+    sg_hybrid__triangle_sites(hh.vertex, hh.b1, hh.b2, &hit->splat, &w, 1);
     return 1;
 }
 
@@ -275,11 +269,10 @@ int sg_hybrid_scene_occluded(const sg_hybrid *h, float lod, const sg_ray *ray, s
     return found;
 }
 
-/* The triangle hit behind an sg_hit (invariant 2): vertices, and the
- * barycentrics the triangle test found (the hit carries them); the
- * geometric normal only when with_normal (the lookup's weights do not
- * read it: a square root and a division less a pixel). */
-static sg_hybrid_hit triangle_hit(const sg_hybrid *h, const sg_hit *hit, int with_normal)
+/* The triangle hit behind an sg_hit (invariant 2): vertices, the
+ * barycentrics the triangle test found (the hit carries them) and the
+ * geometric normal. */
+static sg_hybrid_hit triangle_hit(const sg_hybrid *h, const sg_hit *hit)
 {
     sg_hybrid_hit hh = {.t = hit->t, .p = hit->p, .node = SG_INVALID_ID, .slot = hit->leaf};
     const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
@@ -287,7 +280,7 @@ static sg_hybrid_hit triangle_hit(const sg_hybrid *h, const sg_hit *hit, int wit
     memcpy(hh.vertex, v, sizeof hh.vertex);
     hh.b1 = hit->b1;
     hh.b2 = hit->b2;
-    hh.ng = with_normal ? tri_normal(h, hit->leaf) : sg_v3(0.0f, 0.0f, 0.0f);
+    hh.ng = tri_normal(h, hit->leaf);
     hh.ns = hit->n;
     return hh;
 }
@@ -297,24 +290,8 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
 {
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
-    if (hit->leaf < h->info.triangle_count) {
-        if (max < 3) { /* the largest first: sg_hybrid_hit_sites sorts */
-            sg_hybrid_hit hh = triangle_hit(h, hit, 0);
-            return sg_hybrid_hit_sites(h, &hh, ids, weights, max);
-        }
-        /* The lookup's case, every pixel: sg_hybrid_hit_sites with max 3
-         * (vertex order, weights over their sum), without building the
-         * whole sg_hybrid_hit (test_hybrid scene_interface: same bits). */
-        const uint32_t *v = h->tri + 3 * (size_t)hit->leaf;
-        float w[3];
-        sg_hybrid__clamped_weights(hit->b1, hit->b2, w);
-        const float sum = w[0] + w[1] + w[2];
-        for (int k = 0; k < 3; ++k) {
-            ids[k] = v[k];
-            weights[k] = sum > 0.0f ? w[k] / sum : 1.0f / 3.0f;
-        }
-        return 3;
-    }
+    if (hit->leaf < h->info.triangle_count) /* the lookup's case, every pixel: no sg_hybrid_hit built */
+        return sg_hybrid__triangle_sites(h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, ids, weights, max);
     if (hit->splat >= s->view.count)
         return 0;
     ids[0] = hit->splat;
@@ -326,7 +303,7 @@ sg_ray sg_hybrid_scene_spawn_ray(const sg_hybrid *h, const sg_hybrid_sites *s, c
                                  float tmax)
 {
     if (hit->leaf < h->info.triangle_count) {
-        sg_hybrid_hit hh = triangle_hit(h, hit, 1);
+        sg_hybrid_hit hh = triangle_hit(h, hit);
         /* The caller chose dir on one side of the shading normal; where the
          * triangle's plane puts it on the other (near the terminator of an
          * interpolated normal), it would pass through its own triangle: a
