@@ -463,13 +463,28 @@ static void levels_weights(const double cover[SG_SAMPLES_MAX_LEVEL + 1], double 
     }
 }
 
-/* A site's fit: the weighted sums of the least squares below and each
- * channel's range. */
+/* A site's fit: weighted least squares of f = c0 + c1 u + c2 v in the
+ * site's tangent plane (u, v in units of the level-0 support), c0 the
+ * value: exact for light that varies linearly over the surface, and on a
+ * curved surface the normal (what the light depends on) does, to first
+ * order. A weighted mean would pull every value towards its
+ * neighbourhood's average (1.5% of the energy on a unit sphere at the
+ * default spacing, measured). The sums, and each channel's range. */
 typedef struct fit_sums {
     double m[6];                             /* sums of w, wu, wv, wuu, wuv, wvv */
     double rhs[SG_SAMPLES_MAX_CHANNELS][3];  /* per channel: sums of wf, wfu, wfv */
     float lo[SG_SAMPLES_MAX_CHANNELS], hi[SG_SAMPLES_MAX_CHANNELS];
 } fit_sums;
+
+static void fit_init(fit_sums *s, size_t nc)
+{
+    memset(s->m, 0, sizeof s->m);
+    memset(s->rhs, 0, sizeof s->rhs);
+    for (size_t c = 0; c < nc; ++c) {
+        s->lo[c] = INFINITY;
+        s->hi[c] = -INFINITY;
+    }
+}
 
 /* Adds sample j (values f, nc channels) at (u, v) with weight w. */
 static void fit_add(fit_sums *s, double w, double u, double v, const float *f, size_t nc)
@@ -486,6 +501,26 @@ static void fit_add(fit_sums *s, double w, double u, double v, const float *f, s
         s->rhs[c][2] += w * f[c] * v;
         s->lo[c] = fminf(s->lo[c], f[c]);
         s->hi[c] = fmaxf(s->hi[c], f[c]);
+    }
+}
+
+/* out (nc values): c0 of each channel's fit, s->m[0] > 0. By Cramer's
+ * rule; the weighted mean where the points do not span the plane (a line
+ * of samples, one sample, a rim). No new extrema: a fit across a shadow
+ * edge cannot overshoot the values it was made from. */
+static void fit_solve(const fit_sums *s, size_t nc, float *out)
+{
+    double a = s->m[0], b = s->m[1], c_ = s->m[2], d = s->m[3], e = s->m[4], f = s->m[5];
+    double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
+    int fit = det > 1e-4 * a * a * a;
+    for (size_t c = 0; c < nc; ++c) {
+        double v0 = s->rhs[c][0] / a;
+        if (fit) {
+            double r0 = s->rhs[c][0], r1 = s->rhs[c][1], r2 = s->rhs[c][2];
+            v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
+        }
+        float vf = (float)v0;
+        out[c] = vf < s->lo[c] ? s->lo[c] : (vf > s->hi[c] ? s->hi[c] : vf);
     }
 }
 
@@ -562,20 +597,8 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
             sg_v3_basis(n, &t, &bt);
             uint32_t heads[27];
             grid_around(&g, p, heads);
-            /* Weighted least squares of f = c0 + c1 u + c2 v in the splat's
-             * tangent plane (u, v in units of the level-0 support), c0 the
-             * value: exact for light that varies linearly over the surface,
-             * and on a curved surface the normal (what the light depends on)
-             * does, to first order. A weighted mean would pull every value
-             * towards its neighbourhood's average (1.5% of the energy on a
-             * unit sphere at the default spacing, measured). */
             fit_sums fs;
-            memset(fs.m, 0, sizeof fs.m);
-            memset(fs.rhs, 0, sizeof fs.rhs);
-            for (size_t c = 0; c < nc; ++c) {
-                fs.lo[c] = INFINITY;
-                fs.hi[c] = -INFINITY;
-            }
+            fit_init(&fs, nc);
             float inv_r0 = 1.0f / (support * s0);
             double cover[SG_SAMPLES_MAX_LEVEL + 1] = {0}, level_w[SG_SAMPLES_MAX_LEVEL + 1];
             nl.n = 0;
@@ -596,26 +619,8 @@ sg_status sg_samples_interpolate_n(const sg_sites *ps, const sg_sample_set *set,
                 fit_add(&fs, w, sg_v3_dot(nl.dp[k], t) * inv_r0, sg_v3_dot(nl.dp[k], bt) * inv_r0,
                         values + nc * nl.j[k], nc);
             }
-            const double *m = fs.m;
-            float *lo = fs.lo, *hi = fs.hi;
-            double (*rhs)[3] = fs.rhs;
-            if (m[0] > 0.0) {
-                /* c0 by Cramer's rule; the weighted mean where the points do
-                 * not span the plane (a line of samples, one sample, a rim). */
-                double a = m[0], b = m[1], c_ = m[2], d = m[3], e = m[4], f = m[5];
-                double det = a * (d * f - e * e) - b * (b * f - e * c_) + c_ * (b * e - d * c_);
-                int fit = det > 1e-4 * a * a * a;
-                for (size_t c = 0; c < nc; ++c) {
-                    double v0 = rhs[c][0] / a;
-                    if (fit) {
-                        double r0 = rhs[c][0], r1 = rhs[c][1], r2 = rhs[c][2];
-                        v0 = (r0 * (d * f - e * e) - b * (r1 * f - e * r2) + c_ * (r1 * e - d * r2)) / det;
-                    }
-                    /* no new extrema: a fit across a shadow edge cannot
-                     * overshoot the values it was made from */
-                    float vf = (float)v0;
-                    out[nc * i + c] = vf < lo[c] ? lo[c] : (vf > hi[c] ? hi[c] : vf);
-                }
+            if (fs.m[0] > 0.0) {
+                fit_solve(&fs, nc, out + nc * i);
             } else {
                 uint32_t j = nearest_in_cells(&g, ps, set, i, normal_cos);
                 if (j == NONE)
