@@ -434,8 +434,8 @@ static int bake_main(int argc, char **argv, sg_mpi *mpi)
         fail(err.message);
         goto done;
     }
-    if (!o.ray_cone_set && sf.bake.ray_cone >= 0.0f) { /* the scene's "bake" key */
-        o.desc.ray_cone = sf.bake.ray_cone > 0.0f ? sf.bake.ray_cone : -1.0f;
+    if (!o.ray_cone_set) { /* the scene's "bake" key, unless --ray-cone */
+        sg_prog_bake_desc_from_scene(&sf, &o.desc);
         d = sg_bake_desc_resolve(&o.desc);
     }
     uint64_t scene_hash = sg_scene_file_hash(&sf, SG_SCENE_HASH_BAKE);

@@ -205,6 +205,12 @@ static int on_photons(void *user, size_t done, size_t total)
     return 0;
 }
 
+void sg_prog_bake_desc_from_scene(const sg_scene_file *sf, sg_bake_desc *d)
+{
+    if (sf->bake.ray_cone >= 0.0f) /* given; bake.h: < 0 is off, 0 the default */
+        d->ray_cone = sf->bake.ray_cone > 0.0f ? sf->bake.ray_cone : -1.0f;
+}
+
 sg_status sg_prog_bake_obtain(const sg_prog_bake *plan, const sg_scene_file *sf, const sg_world *w, sg_bake **out,
                               sg_error *err)
 {
@@ -224,8 +230,7 @@ sg_status sg_prog_bake_obtain(const sg_prog_bake *plan, const sg_scene_file *sf,
         bake_progress bp = {.t0 = omp_get_wtime(), .tty = isatty(STDERR_FILENO)};
         bp.last = bp.t0;
         sg_bake_desc d = {.photons = {.progress = on_photons, .progress_user = &bp}};
-        if (sf->bake.ray_cone >= 0.0f) /* the scene's "bake" key; 0 there: off */
-            d.ray_cone = sf->bake.ray_cone > 0.0f ? sf->bake.ray_cone : -1.0f;
+        sg_prog_bake_desc_from_scene(sf, &d);
         sg_bake *b = NULL;
         if ((st = sg_bake_create(w, &d, &b, err)) != SG_OK)
             return st;

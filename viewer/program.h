@@ -81,6 +81,11 @@ typedef struct sg_prog_bake {
 sg_status sg_prog_bake_plan(const char *input, const char *output, const char *explicit_bake,
                             const sg_scene_file *sf, sg_prog_bake *plan, sg_error *err);
 
+/* The scene file's "bake" options (io/scene_file.h sg_scene_bake) into d:
+ * a ray cone given there (0 there: off); left as it is where the file
+ * gives none. A program's own options override them. */
+void sg_prog_bake_desc_from_scene(const sg_scene_file *sf, sg_bake_desc *d);
+
 /* With the world built: bakes when plan->need (default parameters, a
  * progress line, the free space checked first), then loads the bake. */
 sg_status sg_prog_bake_obtain(const sg_prog_bake *plan, const sg_scene_file *sf, const sg_world *w, sg_bake **out,
