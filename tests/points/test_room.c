@@ -11,8 +11,6 @@
 #include "points/room.h"
 #include "render/world.h"
 
-static const float PI = 3.14159265358979f;
-
 /* The mesh is closed and oriented outwards from the wall material: the
  * divergence theorem's signed volume, sum over triangles of
  * p0 . (p1 x p2) / 6, is the material's volume, outer box minus inner box
@@ -64,13 +62,6 @@ static void test_room_mesh_closed(void **state)
     assert_non_null(strstr(err.message, "cell size"));
 }
 
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* Where a ray from inside leaves the room's inner box: 1 when through the
  * window's opening in the +X wall (it may then meet a reveal, or go out). */
 static int leaves_by_window(sg_vec3 o, sg_vec3 d)
@@ -105,7 +96,7 @@ static void check_room_holds_rays(const char *model)
     for (int i = 0; i < 4000; ++i) {
         sg_vec3 o = sg_v3(3.2f * sg_test_rand01(&rng) - 1.6f, 0.3f + 1.9f * sg_test_rand01(&rng),
                           3.2f * sg_test_rand01(&rng) - 1.6f);
-        sg_vec3 d = random_dir(&rng);
+        sg_vec3 d = sg_test_random_dir(&rng);
         sg_ray ray = {.org = o, .dir = d, .tmin = 0, .tmax = INFINITY};
         if (leaves_by_window(o, d)) {
             ++by_window;

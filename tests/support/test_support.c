@@ -1,6 +1,7 @@
 /* test_support.c — see test_support.h. */
 #include "test_support.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,6 +75,20 @@ float sg_test_rand01(uint64_t *state)
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     z ^= z >> 31;
     return (float)(z >> 40) * (1.0f / 16777216.0f);
+}
+
+sg_vec3 sg_test_random_dir(uint64_t *state)
+{
+    const float pi = 3.14159265358979f;
+    float z = 1.0f - 2.0f * sg_test_rand01(state), phi = 2.0f * pi * sg_test_rand01(state);
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    return sg_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+sg_vec3 sg_test_random_dir_facing(uint64_t *state, sg_vec3 n)
+{
+    sg_vec3 d = sg_test_random_dir(state);
+    return sg_v3_dot(d, n) < 0.0f ? sg_v3_scale(d, -1.0f) : d;
 }
 
 struct sg_world *sg_test_world_from_json(const char *json)

@@ -11,6 +11,8 @@
 
 #include <stdbool.h>
 
+#include "math/vec3.h"
+
 /* Writes `size` bytes to a fresh file under the test's temp folder and
  * returns its path (static storage, overwritten by the next call with the
  * same name). Fails the test on I/O errors. */
@@ -55,5 +57,12 @@ void sg_test_make_sheet(struct sg_pointset *ps, int g, float thick, float *spaci
 
 /* Deterministic uniform float in [0,1) from a 64-bit state (splitmix64). */
 float sg_test_rand01(uint64_t *state);
+
+/* A unit vector uniform on the sphere, from two sg_test_rand01 draws. */
+sg_vec3 sg_test_random_dir(uint64_t *state);
+
+/* The same, mirrored into n's hemisphere where it points away from n (the
+ * direction of a ray spawned off a surface of normal n). */
+sg_vec3 sg_test_random_dir_facing(uint64_t *state, sg_vec3 n);
 
 #endif

@@ -441,13 +441,6 @@ static void test_hybrid_lod_orders_agree(void **state)
 
 /* ---- 6-7: spawned rays, sites --------------------------------------------- */
 
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 6.2831853f * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 static void test_hybrid_no_self_hits(void **state)
 {
     (void)state;
@@ -465,7 +458,7 @@ static void test_hybrid_no_self_hits(void **state)
             ++hits;
             lod_hits += hit.node != SG_INVALID_ID;
             for (int k = 0; k < 8; ++k) {
-                sg_vec3 d = random_dir(&rng);
+                sg_vec3 d = sg_test_random_dir(&rng);
                 int out = sg_v3_dot(d, hit.ng) > 0.0f;
                 sg_ray s = sg_hybrid_spawn_ray(h, &hit, d, INFINITY);
                 sg_hybrid_hit sh;
@@ -753,8 +746,8 @@ static void test_hybrid_kernels_agree(void **state)
             const sg_stree_bundle *B = &h->tree.bundles[bi];
             int l = k % SG_STREE_WIDTH;
             sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
-            sg_vec3 o = sg_v3_scale(random_dir(&rng), 3.0f);
-            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(random_dir(&rng), 0.1f)));
+            sg_vec3 o = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(sg_test_random_dir(&rng), 0.1f)));
             sg_bundle_ray br = {.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f,
                                 .lod0 = k % 2 ? 0.01f : 0.0f, .lod1 = k % 2 ? 0.05f : 0.0f};
             float ta[SG_STREE_WIDTH], tb[SG_STREE_WIDTH];
@@ -783,12 +776,12 @@ static void test_hybrid_kernels_agree(void **state)
         sg_bundle_ray16 r16;
         float tfar[16];
         sg_bundle_ray one[16];
-        sg_vec3 eye = sg_v3_scale(random_dir(&rng), 3.0f);
+        sg_vec3 eye = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
         for (int i = 0; i < 16; ++i) {
             int l = (int)(bi + (size_t)i) % SG_STREE_WIDTH;
             sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
-            sg_vec3 o = bi % 2 ? eye : sg_v3_scale(random_dir(&rng), 3.0f);
-            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(random_dir(&rng), 0.1f)));
+            sg_vec3 o = bi % 2 ? eye : sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(sg_test_random_dir(&rng), 0.1f)));
             one[i] = (sg_bundle_ray){.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f,
                                      .lod0 = i % 2 ? 0.01f : 0.0f, .lod1 = i % 2 ? 0.05f : 0.0f};
             r16.ox[i] = o.x, r16.oy[i] = o.y, r16.oz[i] = o.z;
@@ -908,9 +901,7 @@ static void test_hybrid_scene_interface(void **state)
             }
             /* spawned outwards: the sphere is convex, nothing to hit */
             for (int k = 0; k < 4; ++k) {
-                sg_vec3 d = random_dir(&rng);
-                if (sg_v3_dot(d, a.n) < 0.0f)
-                    d = sg_v3_scale(d, -1.0f);
+                sg_vec3 d = sg_test_random_dir_facing(&rng, a.n);
                 sg_ray s2 = sg_scene_spawn_ray(sc, &a, d, INFINITY);
                 sg_hit x2;
                 self += (size_t)sg_scene_intersect(sc, &s2, &x2, NULL);
@@ -1112,8 +1103,8 @@ static void test_hybrid_albedo_is_site_blend(void **state)
         uint64_t rng = 5;
         size_t kinds[3] = {0}; /* misses, triangle hits, LOD hits */
         for (int i = 0; i < 20000; ++i) {
-            sg_vec3 org = sg_v3_scale(random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
-            sg_ray r = ray_to(org, sg_v3_scale(random_dir(&rng), 1.2f * sg_test_rand01(&rng)));
+            sg_vec3 org = sg_v3_scale(sg_test_random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
+            sg_ray r = ray_to(org, sg_v3_scale(sg_test_random_dir(&rng), 1.2f * sg_test_rand01(&rng)));
             r.spread = i % 2 ? 0.01f : 0.0f;
             sg_hit hit;
             if (!sg_scene_intersect(sc, &r, &hit, NULL)) {
@@ -1161,8 +1152,8 @@ static void block_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t fla
                        sg_ray *rays)
 {
     enum { N = 64 };
-    sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
-    sg_vec3 look = sg_v3_add(c, sg_v3_scale(random_dir(rng), 0.5f * R * sg_test_rand01(rng)));
+    sg_vec3 eye = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
+    sg_vec3 look = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(rng), 0.5f * R * sg_test_rand01(rng)));
     sg_vec3 fw = sg_v3_normalize(sg_v3_sub(look, eye));
     sg_vec3 rt = sg_v3_normalize(sg_v3_cross(fw, fabsf(fw.y) < 0.9f ? sg_v3(0, 1, 0) : sg_v3(1, 0, 0)));
     sg_vec3 up = sg_v3_cross(rt, fw);
@@ -1177,8 +1168,8 @@ static void block_rays(uint64_t *rng, sg_vec3 c, float R, int kind, uint32_t fla
         rays[r] = (sg_ray){.org = eye, .dir = d, .tmin = 0.0f, .tmax = INFINITY, .flags = flags,
                            .spread = spread * 2.0f * th / N};
         if (kind == 2) { /* random: own eye, towards the model */
-            rays[r].org = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
-            sg_vec3 to = sg_v3_add(c, sg_v3_scale(random_dir(rng), R * sg_test_rand01(rng)));
+            rays[r].org = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(rng), R * (0.3f + 3.0f * sg_test_rand01(rng))));
+            sg_vec3 to = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(rng), R * sg_test_rand01(rng)));
             rays[r].dir = sg_v3_normalize(sg_v3_sub(to, rays[r].org));
         }
     }

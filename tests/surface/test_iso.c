@@ -44,13 +44,6 @@ static float max_radius(const sg_pointset *ps)
     return r;
 }
 
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* Angle between unit vectors, accurate near 0 (acos of a dot product
  * resolves only ~5e-4 rad there in float). */
 static float angle(sg_vec3 a, sg_vec3 b) { return 2.0f * asinf(fminf(1.0f, 0.5f * sg_v3_length(sg_v3_sub(a, b)))); }
@@ -87,8 +80,8 @@ static void test_iso_sphere_accuracy(void **state)
     int misses = 0;
     float worst_pos = 0, worst_ang = 0;
     for (int i = 0; i < 4000; ++i) {
-        sg_vec3 target = random_dir(&rng);
-        sg_vec3 from = sg_v3_scale(sg_v3_normalize(sg_v3_add(target, sg_v3_scale(random_dir(&rng), 0.5f))), 4.0f);
+        sg_vec3 target = sg_test_random_dir(&rng);
+        sg_vec3 from = sg_v3_scale(sg_v3_normalize(sg_v3_add(target, sg_v3_scale(sg_test_random_dir(&rng), 0.5f))), 4.0f);
         sg_ray ray = make_ray(from, sg_v3_sub(target, from), SG_RAY_ANY_FACE);
         sg_hit hit;
         if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
@@ -145,7 +138,7 @@ static void test_iso_plane_exact(void **state)
     for (int i = 0; i < 2000; ++i) {
         float lim = 1.0f - 2.0f * r;
         sg_vec3 target = sg_v3(lim * (2 * sg_test_rand01(&rng) - 1), 0.25f, lim * (2 * sg_test_rand01(&rng) - 1));
-        sg_vec3 dir = random_dir(&rng);
+        sg_vec3 dir = sg_test_random_dir(&rng);
         dir.y = -fabsf(dir.y) - 0.2f; /* from above, at most ~80 degrees off the normal */
         sg_vec3 from = sg_v3_madd(target, sg_v3_normalize(dir), -2.0f);
         sg_ray ray = make_ray(from, dir, SG_RAY_FRONT_ONLY);
@@ -351,7 +344,7 @@ static void test_iso_sphere_no_holes(void **state)
     uint64_t rng = 3;
     int misses = 0;
     for (int i = 0; i < 20000; ++i) {
-        sg_vec3 from = sg_v3_scale(random_dir(&rng), 3.0f);
+        sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
         sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
         sg_hit hit;
         if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
@@ -514,7 +507,7 @@ static void test_iso_quantisation_bound(void **state)
     uint64_t rng = 11;
     float worst_codec = 0;
     for (int i = 0; i < 200000; ++i) {
-        sg_vec3 n = random_dir(&rng);
+        sg_vec3 n = sg_test_random_dir(&rng);
         sg_vec3 m = sg_iso_decode_normal(sg_iso_encode_normal(n));
         worst_codec = fmaxf(worst_codec, angle(n, m));
     }
@@ -551,7 +544,7 @@ static void test_iso_face_flags(void **state)
     uint64_t rng = 5;
     int bad = 0;
     for (int i = 0; i < 500; ++i) {
-        sg_vec3 d = random_dir(&rng);
+        sg_vec3 d = sg_test_random_dir(&rng);
         sg_hit h;
         sg_ray front = make_ray(sg_v3(0, 0, 0), d, SG_RAY_FRONT_ONLY);
         sg_ray back = make_ray(sg_v3(0, 0, 0), d, SG_RAY_BACK_ONLY);
@@ -672,8 +665,8 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
     for (int cam = 0; cam < 400; ++cam) {
         float lod_px = cam % 2 ? 1.0f : 0.0f;
         sg_iso_set_lod(iso, lod_px);
-        sg_vec3 eye = sg_v3_add(c, sg_v3_scale(random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
-        sg_vec3 look = sg_v3_add(c, sg_v3_scale(random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
+        sg_vec3 eye = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
+        sg_vec3 look = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
         uint32_t fl = flags[cam % 3];
         int step = cam % 4 == 3 ? 1 + (int)(16.0f * sg_test_rand01(&rng)) : 1;
         for (int q = 0; q < 16; ++q) {
@@ -1067,9 +1060,7 @@ static void test_iso_sites_rays_leave_floor(void **state)
         self.p = h.p;
         self.n = h.n;
         for (int k = 0; k < 8; ++k) {
-            sg_vec3 d = random_dir(&rng);
-            if (sg_v3_dot(d, self.n) < 0.0f)
-                d = sg_v3_scale(d, -1.0f);
+            sg_vec3 d = sg_test_random_dir_facing(&rng, self.n);
             sg_ray ray = sg_scene_spawn_ray(sc, &self, d, INFINITY);
             sg_hit out;
             ++rays;

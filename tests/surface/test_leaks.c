@@ -30,13 +30,6 @@ static sg_scene *build(const sg_pointset *ps, sg_surface_model model)
     return s;
 }
 
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* The rotation of the tilted walls: 35 degrees about x, then 20 about z,
  * so that no axis of the kd-tree is the wall's (cell shrinking slices a
  * cell along the dominant axis of its normals, which cancel in a wall). */
@@ -79,7 +72,7 @@ static void check_thin_wall(sg_surface_model model, float thick_in_radii, int ti
         float x = 1.6f * sg_test_rand01(&rng) - 0.8f, z = 1.6f * sg_test_rand01(&rng) - 0.8f;
         for (int side = 0; side < 2; ++side) {
             float sy = side ? -1.0f : 1.0f;
-            sg_vec3 d = random_dir(&rng);
+            sg_vec3 d = sg_test_random_dir(&rng);
             if (d.y * sy > 0.0f)
                 d.y = -d.y;
             if (-d.y * sy < 0.26f) /* at most 75 degrees from the normal */
@@ -171,14 +164,12 @@ static void check_shell(sg_surface_model model)
     uint64_t rng = 23;
     int failures = 0;
     for (int i = 0; i < 1500; ++i) {
-        sg_vec3 o = sg_v3_scale(random_dir(&rng), 0.9f * sg_test_rand01(&rng));
-        sg_ray ray = {.org = o, .dir = random_dir(&rng), .tmin = 0, .tmax = INFINITY};
+        sg_vec3 o = sg_v3_scale(sg_test_random_dir(&rng), 0.9f * sg_test_rand01(&rng));
+        sg_ray ray = {.org = o, .dir = sg_test_random_dir(&rng), .tmin = 0, .tmax = INFINITY};
         sg_hit hit;
         int ok = sg_scene_intersect(s, &ray, &hit, NULL);
         if (ok && (i & 1)) { /* leave the hit into the shell, as a bounce does */
-            sg_vec3 d = random_dir(&rng);
-            if (sg_v3_dot(d, hit.n) < 0.0f)
-                d = sg_v3_scale(d, -1.0f);
+            sg_vec3 d = sg_test_random_dir_facing(&rng, hit.n);
             ray = sg_scene_spawn_ray(s, &hit, d, INFINITY);
             if (sg_v3_dot(d, sg_v3_normalize(hit.p)) > -0.2f)
                 continue; /* within 12 degrees of the wall: the self test's blind spot (ray.h) */
@@ -285,7 +276,7 @@ static void check_sides(sg_surface_model model)
     for (int i = 0; i < 6000; ++i) {
         uint32_t j = (uint32_t)(sg_test_rand01(&rng) * (float)ps.count) % (uint32_t)ps.count;
         sg_vec3 p = sg_pointset_position(&ps, j), n = sg_pointset_normal(&ps, j);
-        sg_vec3 t = random_dir(&rng);
+        sg_vec3 t = sg_test_random_dir(&rng);
         t = sg_v3_normalize(sg_v3_sub(t, sg_v3_scale(n, sg_v3_dot(t, n))));
         float ang = (60.0f + 25.0f * sg_test_rand01(&rng)) * PI / 180.0f;
         sg_vec3 d = sg_v3_normalize(sg_v3_add(sg_v3_scale(n, -cosf(ang)), sg_v3_scale(t, sinf(ang))));
@@ -328,8 +319,8 @@ static void check_inside(sg_surface_model model)
     uint64_t rng = 5;
     int failures = 0;
     for (int i = 0; i < 3000; ++i) {
-        sg_vec3 o = sg_v3_scale(random_dir(&rng), 0.3f * sg_test_rand01(&rng));
-        sg_ray ray = {.org = o, .dir = random_dir(&rng), .tmin = 0, .tmax = INFINITY};
+        sg_vec3 o = sg_v3_scale(sg_test_random_dir(&rng), 0.3f * sg_test_rand01(&rng));
+        sg_ray ray = {.org = o, .dir = sg_test_random_dir(&rng), .tmin = 0, .tmax = INFINITY};
         sg_hit hit;
         if (!(sg_scene_intersect(s, &ray, &hit, NULL) && sg_v3_dot(hit.n, ray.dir) > 0.0f) && failures++ == 0)
             fprintf(stderr, "model %d ray %d from inside: no back-face hit\n", (int)model, i);

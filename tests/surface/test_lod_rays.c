@@ -35,15 +35,6 @@
 #include "render/world.h"
 #include "surface/scene.h"
 
-static const float PI = 3.14159265358979f;
-
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* Whether p lies on the room's inner boundary (within e of a face) with n
  * facing into the room, away from the window's wall and its edges by
  * `clear` (so that nothing but its own face lies within `clear`). */
@@ -124,9 +115,7 @@ static void check_room(const char *model)
             self.n = h.n;
             ++sources;
             for (int k = 0; k < 4; ++k) {
-                sg_vec3 d = random_dir(&rng);
-                if (sg_v3_dot(d, self.n) < 0.0f)
-                    d = sg_v3_scale(d, -1.0f);
+                sg_vec3 d = sg_test_random_dir_facing(&rng, self.n);
                 sg_ray ray = sg_scene_spawn_ray(sc, &self, d, INFINITY);
                 sg_ray thin = ray;
                 ray.spread = spread;

@@ -44,18 +44,11 @@ static sg_scene *build(const sg_pointset *ps, sg_surface_model model, sg_kernel 
 }
 
 /* A random unit vector from two uniforms. */
-static sg_vec3 random_dir(uint64_t *rng)
-{
-    float z = 1.0f - 2.0f * sg_test_rand01(rng), phi = 2.0f * PI * sg_test_rand01(rng);
-    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    return sg_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* A ray from outside (distance 4R) towards the sphere point R * target,
  * entering at an angle of at most ~60 degrees from the normal. */
 static sg_ray ray_at_sphere(sg_vec3 target, float R, uint64_t *rng)
 {
-    sg_vec3 jitter = sg_v3_scale(random_dir(rng), 0.5f);
+    sg_vec3 jitter = sg_v3_scale(sg_test_random_dir(rng), 0.5f);
     sg_vec3 from = sg_v3_scale(sg_v3_normalize(sg_v3_add(target, jitter)), 4.0f * R);
     sg_vec3 to = sg_v3_scale(target, R);
     sg_ray r = {.org = from, .dir = sg_v3_normalize(sg_v3_sub(to, from)), .tmin = 0, .tmax = INFINITY};
@@ -84,7 +77,7 @@ static void check_sphere(sg_surface_model model, sg_kernel kernel, uint32_t disa
     int misses = 0;
     float worst_pos = 0, worst_ang = 0;
     for (int i = 0; i < 4000; ++i) {
-        sg_vec3 target = random_dir(&rng);
+        sg_vec3 target = sg_test_random_dir(&rng);
         sg_ray ray = ray_at_sphere(target, R, &rng);
         sg_hit hit;
         if (!sg_scene_intersect(s, &ray, &hit, NULL)) {
@@ -186,7 +179,7 @@ static void check_cube(sg_surface_model model)
         int axis = (int)(3 * sg_test_rand01(&rng)) % 3;
         float side = sg_test_rand01(&rng) < 0.5f ? -1.0f : 1.0f;
         if (axis == 0) t.x = side; else if (axis == 1) t.y = side; else t.z = side;
-        sg_vec3 o = sg_v3_scale(sg_v3_normalize(sg_v3_add(t, sg_v3_scale(random_dir(&rng), 0.3f))), 6.0f);
+        sg_vec3 o = sg_v3_scale(sg_v3_normalize(sg_v3_add(t, sg_v3_scale(sg_test_random_dir(&rng), 0.3f))), 6.0f);
         sg_ray ray = {.org = o, .dir = sg_v3_normalize(sg_v3_sub(t, o)), .tmin = 0, .tmax = INFINITY};
         sg_hit hit;
         if (!sg_scene_intersect(s, &ray, &hit, NULL)) {
@@ -337,13 +330,11 @@ static void check_self_shadow(sg_surface_model model)
     uint64_t rng = 11;
     int self_hits = 0, tested = 0;
     for (int i = 0; i < 2000; ++i) {
-        sg_vec3 target = random_dir(&rng);
+        sg_vec3 target = sg_test_random_dir(&rng);
         sg_ray ray = ray_at_sphere(target, 1.0f, &rng);
         sg_hit hit;
         assert_true(sg_scene_intersect(s, &ray, &hit, NULL));
-        sg_vec3 d = random_dir(&rng);
-        if (sg_v3_dot(d, hit.n) < 0.0f)
-            d = sg_v3_scale(d, -1.0f);
+        sg_vec3 d = sg_test_random_dir_facing(&rng, hit.n);
         sg_ray sec = sg_scene_spawn_ray(s, &hit, d, INFINITY);
         /* Every direction, grazing ones included: there a neighbouring disk
          * or a bump of the reconstructed surface faces the ray, and the
@@ -416,7 +407,7 @@ static void test_mls_simd_matches_scalar(void **state)
     for (int trial = 0; trial < 200; ++trial) {
         for (int i = 0; i < N; ++i) {
             px[i] = sg_test_rand01(&rng); py[i] = 0.2f * sg_test_rand01(&rng); pz[i] = sg_test_rand01(&rng);
-            sg_vec3 n = sg_v3_normalize(sg_v3_add(sg_v3(0, 2, 0), random_dir(&rng)));
+            sg_vec3 n = sg_v3_normalize(sg_v3_add(sg_v3(0, 2, 0), sg_test_random_dir(&rng)));
             nx[i] = n.x; ny[i] = n.y; nz[i] = n.z;
             r[i] = 0.1f + 0.3f * sg_test_rand01(&rng);
             ir[i] = 1.0f / r[i];
@@ -463,7 +454,7 @@ static void check_hit_weights(sg_surface_model model, sg_kernel kernel)
     uint64_t rng = 7;
     int hits = 0, many = 0;
     for (int i = 0; i < RAYS; ++i) {
-        sg_ray ray = ray_at_sphere(random_dir(&rng), 1.0f, &rng);
+        sg_ray ray = ray_at_sphere(sg_test_random_dir(&rng), 1.0f, &rng);
         sg_hit hit;
         if (!sg_scene_intersect(s, &ray, &hit, NULL))
             continue;
@@ -472,7 +463,7 @@ static void check_hit_weights(sg_surface_model model, sg_kernel kernel)
             sg_hit q = hit;
             int max = variant == 2 ? 3 : MAXW;
             if (variant == 1) /* off the hit by up to a splat radius */
-                q.p = sg_v3_add(q.p, sg_v3_scale(random_dir(&rng), 2.0f * h * sg_test_rand01(&rng)));
+                q.p = sg_v3_add(q.p, sg_v3_scale(sg_test_random_dir(&rng), 2.0f * h * sg_test_rand01(&rng)));
             uint32_t ida[MAXW], idb[MAXW];
             float wa[MAXW], wb[MAXW];
             int na = sg_scene_hit_sites(s, &q, ida, wa, max);
@@ -518,8 +509,8 @@ static void check_intersect4(sg_surface_model model)
     uint64_t rng = 3;
     int hits = 0, rays_traced = 0;
     for (int i = 0; i < 2000; ++i) {
-        sg_vec3 eye = sg_v3_scale(random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
-        sg_vec3 at = sg_v3_scale(random_dir(&rng), 1.3f * sg_test_rand01(&rng));
+        sg_vec3 eye = sg_v3_scale(sg_test_random_dir(&rng), 2.0f + 3.0f * sg_test_rand01(&rng));
+        sg_vec3 at = sg_v3_scale(sg_test_random_dir(&rng), 1.3f * sg_test_rand01(&rng));
         sg_vec3 fwd = sg_v3_normalize(sg_v3_sub(at, eye));
         sg_vec3 u = sg_v3_normalize(sg_v3_cross(fwd, fabsf(fwd.y) < 0.9f ? sg_v3(0, 1, 0) : sg_v3(1, 0, 0)));
         sg_vec3 v = sg_v3_cross(u, fwd);
