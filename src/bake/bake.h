@@ -176,8 +176,10 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * solve; 5: the bilinear envmap lookup and its sampling (envmap.h), white
  * points for files without colours, mesh samples on the Phong-tessellated
  * surface; 6: sites off the surface are never sample points, and in the
- * interpolation a refined level hides the coarser ones (samples.h). */
-#define SG_BAKE_ALGORITHM 6u
+ * interpolation a refined level hides the coarser ones (samples.h); 7: the
+ * MLS surface bridges gaps in the supports up to a sample spacing (mls.c),
+ * so its rays see other hits. */
+#define SG_BAKE_ALGORITHM 7u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

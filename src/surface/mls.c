@@ -22,7 +22,10 @@
  *     ray's face flags (entering = the front group's F goes from > 0 to
  *     <= 0, leaving = the back group's from < 0 to >= 0);
  *  2. samples with W below W_EPS neither make nor break a crossing: across a
- *     gap in the supports the sign of F carries no information;
+ *     gap in the supports the sign of F carries no information. A gap no
+ *     longer than the sample spacing (max_spacing x rmin) is bridged by
+ *     the covered samples on either side, so that the surface does not
+ *     depend on whether a sample landed in it; a longer gap ends the bracket;
  *  3. the SIMD and the scalar evaluation agree to rounding (tested);
  *  4. a hit's normal lies on its crossing's side: dot(dir, n) < 0 for an
  *     entry, > 0 for an exit (refine_crossing; tests/surface/test_leaks.c);
@@ -758,7 +761,8 @@ void sg_mls_eval8(const sg_splat_soa *s, size_t first, size_t count, sg_kernel k
 
 /* One group's running state along the ray: its last usable sample. */
 typedef struct field_prev {
-    int ok;          /* the last sample had W >= W_EPS      */
+    int ok;          /* a crossing may be bracketed from this sample      */
+    int gap;         /* an uncovered stretch (W < W_EPS) has followed it  */
     float t, F;
     float N[3];
 } field_prev;
@@ -778,6 +782,7 @@ static void refine_crossing(const actives *a, sg_kernel kernel, const sg_ray *ra
     sub_F[0] = pv->F;
     sub_t[9] = hi;
     sub_F[9] = Fhi;
+    sub_W[0] = sub_W[9] = 1.0f; /* both ends are covered samples */
     for (int m = 1; m <= 8; ++m)
         sub_t[m] = lo + (hi - lo) * (float)m / 9.0f;
     eval_actives8(a, kernel, d, sub_t + 1, sub_F + 1, sub_W + 1, N8);
@@ -791,17 +796,20 @@ static void refine_crossing(const actives *a, sg_kernel kernel, const sg_ray *ra
     for (; m < 9; ++m)
         if (sub_W[m] >= W_EPS && (sub_F[m] > 0.0f) != (sub_F[0] > 0.0f))
             break;
-    /* First sample on the far side of zero is m; interpolate in [m-1, m]
-     * (samples of tiny W inside the bracket cannot occur with both ends
-     * covered, barring rounding; then fall back). */
-    float fa = sub_F[m - 1], fb = sub_F[m];
+    /* First sample on the far side of zero is m; interpolate from the
+     * last covered sample before it, c0 (m - 1 unless the bracket spans a
+     * bridged gap in the supports, where F and N are 0 and say nothing). */
+    int c0 = m - 1;
+    while (c0 > 0 && sub_W[c0] < W_EPS)
+        --c0;
+    float fa = sub_F[c0], fb = sub_F[m];
     float u = (fa != fb) ? fa / (fa - fb) : 0.5f;
     if (!(u >= 0.0f && u <= 1.0f))
         u = 0.5f;
-    float th = sub_t[m - 1] + (sub_t[m] - sub_t[m - 1]) * u;
-    sg_vec3 N = sg_v3(sub_N[0][m - 1] + (sub_N[0][m] - sub_N[0][m - 1]) * u,
-                      sub_N[1][m - 1] + (sub_N[1][m] - sub_N[1][m - 1]) * u,
-                      sub_N[2][m - 1] + (sub_N[2][m] - sub_N[2][m - 1]) * u);
+    float th = sub_t[c0] + (sub_t[m] - sub_t[c0]) * u;
+    sg_vec3 N = sg_v3(sub_N[0][c0] + (sub_N[0][m] - sub_N[0][c0]) * u,
+                      sub_N[1][c0] + (sub_N[1][m] - sub_N[1][c0]) * u,
+                      sub_N[2][c0] + (sub_N[2][m] - sub_N[2][c0]) * u);
     /* The side of the hit is the crossing's: F falling along the ray is an
      * entry, so the normal must face the ray (and rising, face away). The
      * interpolated normal sum is not F's gradient, and at grazing incidence
@@ -822,8 +830,9 @@ static void refine_crossing(const actives *a, sg_kernel kernel, const sg_ray *ra
     hit->p = sg_v3_madd(ray->org, d, th);
     hit->n = sg_v3_normalize(N);
     hit->splat = dominant_splat(a, kernel, th);
-    if (hit->splat == SG_INVALID_ID)
-        hit->splat = dominant_splat(a, kernel, lo);
+    if (hit->splat == SG_INVALID_ID) /* th in a bridged gap; hi is covered */
+        hit->splat = dominant_splat(a, kernel, hi);
+    assert(hit->splat != SG_INVALID_ID);
 }
 
 /* The weighted mean of a's splat positions at o + t d, as q = p - o, and
@@ -953,10 +962,19 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
     for (int j = k; j < ((k + 7) & ~7); ++j)
         ts[j] = tb;
 
+    /* Gaps in the supports up to one sample spacing long are bridged: such
+     * a gap is seen only where a sample happens to land in it (short
+     * leaves sample densely), and where the samples fall must not decide
+     * the surface. A ray tunnelled through the default bunny's flank where
+     * the front's supports broke off 0.2 radii before the field's sign
+     * changed. A longer gap ends the bracket (invariant 2). */
+    const float bridge = mp->max_spacing > 0.0f ? mp->max_spacing * rmin : 0.0f;
     field_prev prev[2] = {{.t = ta}, {.t = ta}};
     for (int gi = 0; gi < 2; ++gi)
-        if ((in.valid >> gi & 1) && in.t == ta) { /* the previous leaf ended where this one starts */
-            prev[gi].ok = 1;
+        if ((in.valid >> gi & 1) && (in.t == ta || in.t == t0)) { /* the previous leaf ended where this one starts */
+            prev[gi].ok = ta - in.t_last[gi] <= bridge || in.t_last[gi] == ta;
+            prev[gi].gap = in.t_last[gi] != ta;
+            prev[gi].t = in.t_last[gi];
             prev[gi].F = in.F[gi];
             memcpy(prev[gi].N, in.N[gi], sizeof prev[gi].N);
         }
@@ -984,7 +1002,8 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
             for (int gi = 0; gi < 2; ++gi) {
                 const field_prev *pv = &prev[gi];
                 float F = F8[gi][l];
-                if (W8[gi][l] < W_EPS || !pv->ok || !group_crossing(gi, pv->F, F))
+                if (W8[gi][l] < W_EPS || !pv->ok || (pv->gap && ts[j] - pv->t > bridge) ||
+                    !group_crossing(gi, pv->F, F))
                     continue;
                 /* A ray that accepts either face leaves a surface only from
                  * inside it: while the splats facing the ray last placed it
@@ -1022,8 +1041,9 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
             if (either && W8[G_FRONT][l] >= W_EPS)
                 front_out = F8[G_FRONT][l] > 0.0f;
             for (int gi = 0; gi < 2; ++gi) {
-                if (W8[gi][l] < W_EPS) {
-                    prev[gi].ok = 0;
+                if (W8[gi][l] < W_EPS) { /* in a gap: bridged while short */
+                    prev[gi].gap = 1;
+                    prev[gi].ok = prev[gi].ok && ts[j] - prev[gi].t <= bridge;
                     continue;
                 }
                 prev[gi] = (field_prev){.ok = 1, .t = ts[j], .F = F8[gi][l],
@@ -1035,8 +1055,9 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
         carry->t = t1;
         carry->outside = front_out;
         for (int gi = 0; gi < 2; ++gi)
-            if (prev[gi].ok && prev[gi].t == t1) {
+            if (prev[gi].ok && (prev[gi].t == t1 || t1 - prev[gi].t <= bridge)) {
                 carry->valid |= 1 << gi;
+                carry->t_last[gi] = prev[gi].t;
                 carry->F[gi] = prev[gi].F;
                 memcpy(carry->N[gi], prev[gi].N, sizeof prev[gi].N);
             }

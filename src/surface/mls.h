@@ -68,10 +68,14 @@ float sg_mls_field_indexed(const sg_pointset *ps, const uint32_t *idx, size_t co
  * per group of splats (the group facing the ray, the group facing away:
  * sg_mls_intersect_leaf). */
 typedef struct sg_mls_carry {
-    int valid;      /* bit g: group g's last sample lies at t with W >= W_EPS */
+    int valid;      /* bit g: group g's last covered sample (W >= W_EPS), at
+                       t_last[g], may still bracket a crossing: it lies at
+                       the leaf's end t, or before a gap in the supports
+                       short enough to bridge (sg_mls_intersect_leaf)     */
     int outside;    /* the ray's last sample of the group facing it, in any
                        leaf so far, had F > 0 (rays accepting either face) */
-    float t;
+    float t;        /* the end of the leaf it comes from                  */
+    float t_last[2];
     float F[2];
     float N[2][3];
 } sg_mls_carry;

@@ -40,8 +40,9 @@
  * of convex keyed edges (mls.c past_back_layer); 7: the ISO's layered
  * corners (iso_build.c corner_field); 8: the ISO's self test reads the
  * surface's normal, not the one turned to the crossing's side (iso.c
- * accept). */
-#define SG_VERIFY_REF_VERSION 8u
+ * accept); 9: MLS bridges gaps in the supports up to a sample spacing
+ * (mls.c, invariant 2). */
+#define SG_VERIFY_REF_VERSION 9u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

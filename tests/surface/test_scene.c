@@ -439,6 +439,47 @@ static void test_mls_simd_matches_scalar(void **state)
     }
 }
 
+/* A gap in the supports no longer than the sample spacing (max_spacing x
+ * the smallest radius) does not hide the crossing across it; a longer one
+ * does (mls.c, invariant 2). Two splats of radius 1 on the plane y = 0,
+ * facing +y, with a gap of g between their supports along x; a ray slanted
+ * down through the plane at x = 0, sampled densely (64 samples over its
+ * 3-long interval, spacing 0.048) so that samples land in the gap. Before
+ * the bridge, a ray tunnelled wherever a sample did (the default bunny
+ * frame's dark pixels). */
+static void test_mls_bridges_short_support_gap(void **state)
+{
+    (void)state;
+    const float gaps[2] = {0.3f, 0.7f}; /* bridged (< 0.5), not bridged */
+    for (int gi = 0; gi < 2; ++gi) {
+        const float g = gaps[gi];
+        float px[2] = {-1.0f - 0.5f * g, 1.0f + 0.5f * g}, py[2] = {0, 0}, pz[2] = {0, 0};
+        float nx[2] = {0, 0}, ny[2] = {1, 1}, nz[2] = {0, 0}, r[2] = {1, 1}, ir[2] = {1, 1};
+        uint32_t id[2] = {0, 1};
+        sg_splat_soa s = {px, py, pz, nx, ny, nz, r, ir, id, NULL};
+        const sg_mls_params mp = {.kernel = SG_KERNEL_HAT, .samples = 64, .max_spacing = 0.5f};
+        for (int face = 0; face < 2; ++face) {
+            sg_ray ray = {.org = sg_v3(-2.0f, 0.1f, 0.0f), .tmin = 0, .tmax = 10,
+                          .flags = face ? SG_RAY_FRONT_ONLY : SG_RAY_ANY_FACE};
+            ray.dir = sg_v3_normalize(sg_v3(1.0f, -0.05f, 0.0f));
+            /* The leaf's interval: x from -1.5 to 1.5. */
+            float t0 = 0.5f / ray.dir.x, t1 = 3.5f / ray.dir.x;
+            sg_hit h;
+            int got = sg_mls_intersect_leaf(&s, 0, 2, &mp, &ray, t0, t1, &h, NULL);
+            if (gi == 0) {
+                if (!got)
+                    fail_msg("gap %g, face flags %u: the ray tunnels through the plane", g, ray.flags);
+                /* The crossing lies in the gap, within its width of x = 0,
+                 * on the plane's front (the ray enters). */
+                assert_true(fabsf(h.p.x) <= 0.5f * g + 0.05f);
+                assert_true(sg_v3_dot(h.n, ray.dir) < 0.0f);
+                assert_true(h.splat == 0 || h.splat == 1);
+            } else if (got)
+                fail_msg("gap %g: a crossing bridged across a gap wider than the spacing (x %g)", g, h.p.x);
+        }
+    }
+}
+
 /* sg_scene_hit_sites (SIMD pre-filter) gives its scalar reference's
  * result bit for bit: same count, ids and weights, at hits from random
  * rays and at points pushed off the hit so that splats sit right at the
@@ -689,6 +730,7 @@ int main(void)
         cmocka_unit_test(test_mls_corner_reflection),
         cmocka_unit_test(test_disk_corner_reflection),
         cmocka_unit_test(test_mls_simd_matches_scalar),
+        cmocka_unit_test(test_mls_bridges_short_support_gap),
         cmocka_unit_test(test_mls_hit_weights_match_reference),
         cmocka_unit_test(test_disk_hit_weights_match_reference),
         cmocka_unit_test(test_mls_intersect4_matches_single),
