@@ -566,40 +566,23 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
-    int cone;                   /* 1: the rays leave one origin within a cone   */
-    float co[3], ca[3];         /* its apex (the origin) and unit axis          */
-    float csin, ccos;           /* sine and cosine of its half-angle, widened   */
+    int cone;                   /* 1: the rays leave one origin within cn       */
+    sg_bundle_cone cn;          /* apex (the origin), axis, half-angle widened  */
 } psoa;
 
 #if SG_BUNDLE_SIMD16
 /* The children of bundle B that some ray of the packet may enter: a
  * sphere that does not meet the packet's cone is entered by none of its
- * rays (Eberly's sphere-cone test, the radius and the cone widened far
- * beyond the rounding of either test), so its 16-ray test is skipped; it
- * would have come out 0 for every ray. Any ray order: all children. */
+ * rays (sg_bundle_cone_test, all eight children in one go), so its 16-ray
+ * test is skipped; it would have come out 0 for every ray. Any ray
+ * order: all children. */
 static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
 {
+    if (P->cone)
+        return sg_bundle_cone_test(B, &P->cn);
     unsigned kids = 0;
-    if (!P->cone) {
-        for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
-            kids |= 1u << l;
-        return kids;
-    }
-    const float s2 = P->csin * P->csin, c2 = P->ccos * P->ccos, back = 1.0f / P->csin;
-    for (int l = 0; l < W; ++l) {
-        const float vx = B->cx[l] - P->co[0], vy = B->cy[l] - P->co[1], vz = B->cz[l] - P->co[2];
-        const float r = B->r[l] * 1.001f + 1e-4f * (fabsf(vx) + fabsf(vy) + fabsf(vz));
-        /* apex moved back along the axis by r / sin: the cone of centres */
-        const float ux = vx + r * back * P->ca[0], uy = vy + r * back * P->ca[1], uz = vz + r * back * P->ca[2];
-        const float e = ux * P->ca[0] + uy * P->ca[1] + uz * P->ca[2];
-        const float u2 = ux * ux + uy * uy + uz * uz;
-        const float f = -(vx * P->ca[0] + vy * P->ca[1] + vz * P->ca[2]);
-        const float v2 = vx * vx + vy * vy + vz * vz;
-        /* in the cone of centres, and not behind the apex beyond r; NaN (an
-         * empty lane) fails */
-        const int in = e > 0.0f && e * e >= u2 * c2 && (!(f > 0.0f && f * f >= v2 * s2) || v2 <= r * r);
-        kids |= (unsigned)in << l;
-    }
+    for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
+        kids |= 1u << l;
     return kids;
 }
 #endif
@@ -928,11 +911,11 @@ static void packet_cone(const tray *r, unsigned lanes, psoa *P)
     if (!(cw > 0.55)) /* wider than about 1 radian: the test would reject little */
         return;
     for (int q = 0; q < 3; ++q) {
-        P->co[q] = r[f].o[q];
-        P->ca[q] = (float)(a[q] / len);
+        P->cn.o[q] = r[f].o[q];
+        P->cn.a[q] = (float)(a[q] / len);
     }
-    P->csin = (float)sw;
-    P->ccos = (float)cw;
+    P->cn.sin = (float)sw;
+    P->cn.cos = (float)cw;
     P->cone = 1;
 }
 #endif
