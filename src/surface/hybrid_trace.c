@@ -279,7 +279,10 @@ static inline void prefetch_visit(const sg_hybrid *h, uint32_t word)
 {
 #ifndef SG_HYBRID_NO_PREFETCH
     if (sg_stree_is_leaf(word)) {
-        __builtin_prefetch(h->tri + 3 * (size_t)sg_stree_leaf_first(word));
+        /* up to 8 triangles' ids, 96 bytes: their first and last lines */
+        const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+        __builtin_prefetch(h->tri + 3 * (size_t)first);
+        __builtin_prefetch(h->tri + 3 * (size_t)(first + count) - 1);
     } else {
         const char *nb = (const char *)&h->tree.bundles[word];
         for (size_t o = 0; o < sizeof(sg_stree_bundle); o += 64)
@@ -289,6 +292,15 @@ static inline void prefetch_visit(const sg_hybrid *h, uint32_t word)
     (void)h;
     (void)word;
 #endif
+}
+
+/* Prefetches the vertex positions of a leaf word's triangles (their ids
+ * are read, so they should be in cache: prefetch_visit). */
+static inline void prefetch_vertices(const sg_hybrid *h, uint32_t word)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
+        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
 }
 
 /* Children of bundle cb hit by the ray, nearest last (stack order).
@@ -607,7 +619,8 @@ static inline int order_children(const float key[W], unsigned any, int kids[W])
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
  * decides it (disk hit, skipped, or opened). Returns how many were
- * written to out. */
+ * written to out. floor may lie in out[0] (the popped entry's slot): it is
+ * read in full before out is written, here and in push_children16. */
 static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
                           unsigned lanes, pentry *out, counters *c)
 {
@@ -800,8 +813,7 @@ static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *
 #ifndef SG_HYBRID_NO_PREFETCH
     /* every vertex of the leaf at once: their misses overlap instead of
      * each triangle's waiting on its own */
-    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
-        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
+    prefetch_vertices(h, word);
 #endif
     const sg_tri_ray *t0 = &r[f].tr;
     const int k[3] = {t0->kx, t0->ky, t0->kz};
@@ -842,21 +854,25 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
         root[i] = -INFINITY;
     int sp = push_packet(h, 0, r, bst, P, root, lanes, stack, c);
     while (sp > 0) {
-        const pentry e = stack[--sp];
-        const uint32_t k = e.id;
-        /* the rays whose floor is not beyond their best (e.t[i] > bst[i].t: pruned) */
-        unsigned go = e.lanes;
+        /* Read in place, not copied: a copy was stored in 16-byte pieces
+         * and loaded back 32 bytes at a time, which stalls every pop on
+         * store forwarding. The children are written over this slot, but
+         * push_packet reads the floors (e->t) before it writes an entry. */
+        const pentry *e = &stack[--sp];
+        const uint32_t k = e->id;
+        /* the rays whose floor is not beyond their best (e->t[i] > bst[i].t: pruned) */
+        unsigned go = e->lanes;
 #if SG_BUNDLE_SIMD16
-        go &= ~sg_v16_gt(sg_v16_load(e.t), sg_v16_load(P->bt));
+        go &= ~sg_v16_gt(sg_v16_load(e->t), sg_v16_load(P->bt));
 #else
-        for (unsigned m = e.lanes; m; m &= m - 1)
-            if (e.t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
+        for (unsigned m = e->lanes; m; m &= m - 1)
+            if (e->t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
                 go &= ~(1u << __builtin_ctz(m));
 #endif
         /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
         for (unsigned m = go & P->cull; m; m &= m - 1) {
             const int i = __builtin_ctz(m);
-            if (node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
+            if (node_point(h, k, &r[i], &bst[i], 0, e->t[i], c) == NODE_SKIP)
                 go &= ~(1u << i);
         }
         if (!go)
@@ -864,6 +880,16 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
         c->pops++;
         const uint32_t word = h->tree.bundles[k / W].child[k % W];
         if (sg_stree_is_leaf(word)) {
+#ifndef SG_HYBRID_NO_PREFETCH
+            /* The next entry's vertices while this leaf is tested: their
+             * ids came in when it was pushed, and the positions, which
+             * need the ids, were asked for only as its test began. */
+            if (sp > 0) {
+                const uint32_t nk = stack[sp - 1].id, nword = h->tree.bundles[nk / W].child[nk % W];
+                if (sg_stree_is_leaf(nword))
+                    prefetch_vertices(h, nword);
+            }
+#endif
 #if SG_V16_SIMD
             test_leaf16(h, word, r, bst, P, go, c);
 #else
@@ -872,7 +898,7 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
                 P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
 #endif
         } else {
-            sp += push_packet(h, word, r, bst, P, e.t, go, stack + sp, c);
+            sp += push_packet(h, word, r, bst, P, e->t, go, stack + sp, c);
         }
     }
 }
