@@ -393,10 +393,58 @@ static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const s
     *lod = sg_v16_lt(sg_v16_add(R, R), sg_v16_add(sg_v16_load(r->lod0), sg_v16_mul(sg_v16_load(r->lod1), b)));
     return hit;
 }
+
+/* sg_bundle_test16 for rays that all leave r->ox[0], r->oy[0], r->oz[0]
+ * (camera rays): what depends on the node and the origin only (a = c - o,
+ * the margin, a . u and the slab's numerators) is computed once, as a
+ * scalar, with the same operations, so each ray gets the same bits. */
+static inline unsigned sg_bundle_test16_eye(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                            const float tfar[16], float tin[16], unsigned *lod)
+{
+    const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
+    const float Rs = B->r[l];
+    const float uxs = (float)B->nx[l] * ns, uys = (float)B->ny[l] * ns, uzs = (float)B->nz[l] * ns;
+    const float rss = Rs * ss;
+    const float axs = B->cx[l] - r->ox[0], ays = B->cy[l] - r->oy[0], azs = B->cz[l] - r->oz[0];
+    const float ms = SG_BUNDLE_MARGIN * (fabsf(axs) + fabsf(ays) + fabsf(azs) + Rs);
+    const float Rms = Rs + ms;
+    const float aus = axs * uxs + ays * uys + azs * uzs;
+    const sg_v16 dx = sg_v16_load(r->dx), dy = sg_v16_load(r->dy), dz = sg_v16_load(r->dz);
+    const sg_v16 ax = sg_v16_set1(axs), ay = sg_v16_set1(ays), az = sg_v16_set1(azs);
+    const sg_v16 b = sg_v16_add(sg_v16_add(sg_v16_mul(ax, dx), sg_v16_mul(ay, dy)), sg_v16_mul(az, dz));
+    const sg_v16 qx = sg_v16_sub(sg_v16_mul(ay, dz), sg_v16_mul(az, dy));
+    const sg_v16 qy = sg_v16_sub(sg_v16_mul(az, dx), sg_v16_mul(ax, dz));
+    const sg_v16 qz = sg_v16_sub(sg_v16_mul(ax, dy), sg_v16_mul(ay, dx));
+    const sg_v16 p2 = sg_v16_add(sg_v16_add(sg_v16_mul(qx, qx), sg_v16_mul(qy, qy)), sg_v16_mul(qz, qz));
+    const sg_v16 m = sg_v16_set1(ms);
+    const sg_v16 h2 = sg_v16_sub(sg_v16_set1(Rms * Rms), p2);
+    const sg_v16 hh = sg_v16_sqrt(sg_v16_pos(h2));
+    sg_v16 t0 = sg_v16_sub(sg_v16_sub(b, hh), m);
+    sg_v16 t1 = sg_v16_add(sg_v16_add(b, hh), m);
+    const sg_v16 du = sg_v16_add(sg_v16_add(sg_v16_mul(dx, sg_v16_set1(uxs)), sg_v16_mul(dy, sg_v16_set1(uys))),
+                                 sg_v16_mul(dz, sg_v16_set1(uzs)));
+    const sg_v16 inv = sg_v16_div(sg_v16_set1(1.0f), du);
+    const sg_v16 n0 = sg_v16_mul(sg_v16_set1((float)B->slo[l] * rss - ms + aus), inv);
+    const sg_v16 n1 = sg_v16_mul(sg_v16_set1((float)B->shi[l] * rss + ms + aus), inv);
+    const sg_v16 tn = sg_v16_min(n0, n1), tf = sg_v16_max(n0, n1);
+    t0 = sg_v16_max(tn, t0);
+    t1 = sg_v16_min(tf, t1);
+    sg_v16_store(tin, t0);
+    const unsigned hit = sg_v16_ge(h2, sg_v16_set1(0.0f)) & sg_v16_le(t0, t1) &
+                         sg_v16_ge(t1, sg_v16_load(r->tmin)) & sg_v16_le(t0, sg_v16_load(tfar));
+    const sg_v16 R = sg_v16_set1(Rs);
+    *lod = sg_v16_lt(sg_v16_add(R, R), sg_v16_add(sg_v16_load(r->lod0), sg_v16_mul(sg_v16_load(r->lod1), b)));
+    return hit;
+}
 #else
 #define SG_BUNDLE_SIMD16 0
 static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
                                         const float tfar[16], float tin[16], unsigned *lod)
+{
+    return sg_bundle_test16_scalar(B, l, r, tfar, tin, lod);
+}
+static inline unsigned sg_bundle_test16_eye(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                            const float tfar[16], float tin[16], unsigned *lod)
 {
     return sg_bundle_test16_scalar(B, l, r, tfar, tin, lod);
 }

@@ -578,7 +578,8 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
-    int cone;                   /* 1: the rays leave one origin within cn       */
+    int eye;                    /* 1: every lane of br leaves one origin        */
+    int cone;                   /* 1: and its rays lie within cn                */
     sg_bundle_cone cn;          /* apex (the origin), axis, half-angle widened  */
 } psoa;
 
@@ -696,7 +697,9 @@ static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best 
         const int l = __builtin_ctz(kids);
         _Alignas(64) float tin[PW];
         unsigned lod;
-        const unsigned mask = sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod) & lanes;
+        const unsigned mask = (P->eye ? sg_bundle_test16_eye(B, l, &P->br, P->bt, tin, &lod)
+                                      : sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod)) &
+                              lanes;
         if (!mask)
             continue;
         const sg_v16 f = sg_v16_max(sg_v16_load(tin), fl); /* tin > floor ? tin : floor */
@@ -904,44 +907,59 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
 }
 
 /* The packet's cone (psoa), when its rays leave one origin: the axis is
- * their mean direction and the half-angle the widest ray's, in double,
- * widened by 1e-3 radians (far beyond the rounding to float). */
+ * their mean direction (the lanes of br, copies included: any axis
+ * will do, the half-angle is measured against the one stored) and the
+ * half-angle the widest ray's, widened by 1e-3 radians. In float, across
+ * the lanes: the angle comes from its sine |a x d| / |d|, which float
+ * gives within about 1e-6 radians even for parallel rays (a cosine near 1
+ * would lose it), far below the widening. */
 #if SG_BUNDLE_SIMD16
-static void packet_cone(const tray *r, unsigned lanes, psoa *P)
+static void packet_cone(unsigned lanes, psoa *P)
 {
+    const sg_bundle_ray16 *b = &P->br;
     const int f = __builtin_ctz(lanes);
-    double a[3] = {0.0, 0.0, 0.0};
-    P->cone = 0;
-    for (unsigned m = lanes; m; m &= m - 1) {
-        const tray *ri = &r[__builtin_ctz(m)];
-        if (memcmp(ri->o, r[f].o, sizeof ri->o) != 0)
-            return;
-        for (int q = 0; q < 3; ++q)
-            a[q] += ri->d[q];
-    }
-    const double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    if (!(len > 0.0))
+    P->eye = P->cone = 0;
+    /* lanes outside the packet are copies of ray f */
+    if (sg_v16_neq(sg_v16_load(b->ox), sg_v16_set1(b->ox[f])) |
+        sg_v16_neq(sg_v16_load(b->oy), sg_v16_set1(b->oy[f])) |
+        sg_v16_neq(sg_v16_load(b->oz), sg_v16_set1(b->oz[f])))
         return;
-    double cmin = 1.0;
-    for (unsigned m = lanes; m; m &= m - 1) {
-        const tray *ri = &r[__builtin_ctz(m)];
-        const double dl = sqrt((double)ri->d[0] * ri->d[0] + (double)ri->d[1] * ri->d[1] + (double)ri->d[2] * ri->d[2]);
-        const double c = (a[0] * ri->d[0] + a[1] * ri->d[1] + a[2] * ri->d[2]) / (len * dl);
-        cmin = c < cmin ? c : cmin;
+    P->eye = 1;
+    float a[3] = {0.0f, 0.0f, 0.0f};
+    for (int i = 0; i < PW; ++i) {
+        a[0] += b->dx[i];
+        a[1] += b->dy[i];
+        a[2] += b->dz[i];
     }
-    /* the half-angle plus 1e-3 radians, by the angle-sum identities (no
-     * acos, sin, cos a packet) */
-    const double c0 = cmin > 1.0 ? 1.0 : cmin, s0 = sqrt(1.0 - c0 * c0);
-    const double cd = 0.9999995000000417, sd = 9.999998333333417e-4; /* cos, sin of 1e-3 */
-    const double cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
-    if (!(cw > 0.55)) /* wider than about 1 radian: the test would reject little */
+    const float len = sqrtf(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (!(len > 0.0f))
         return;
-    for (int q = 0; q < 3; ++q) {
-        P->cn.o[q] = r[f].o[q];
-        P->cn.a[q] = (float)(a[q] / len);
-    }
-    P->cn.sin = (float)sw;
-    P->cn.cos = (float)cw;
+    for (int q = 0; q < 3; ++q)
+        a[q] /= len;
+    const sg_v16 dx = sg_v16_load(b->dx), dy = sg_v16_load(b->dy), dz = sg_v16_load(b->dz);
+    const sg_v16 ax = sg_v16_set1(a[0]), ay = sg_v16_set1(a[1]), az = sg_v16_set1(a[2]);
+    const sg_v16 dot = sg_v16_add(sg_v16_add(sg_v16_mul(ax, dx), sg_v16_mul(ay, dy)), sg_v16_mul(az, dz));
+    if (sg_v16_gt(dot, sg_v16_set1(0.0f)) != 0xFFFFu)
+        return; /* a ray at 90 degrees or more from the axis (or NaN) */
+    const sg_v16 qx = sg_v16_sub(sg_v16_mul(ay, dz), sg_v16_mul(az, dy));
+    const sg_v16 qy = sg_v16_sub(sg_v16_mul(az, dx), sg_v16_mul(ax, dz));
+    const sg_v16 qz = sg_v16_sub(sg_v16_mul(ax, dy), sg_v16_mul(ay, dx));
+    const sg_v16 q2 = sg_v16_add(sg_v16_add(sg_v16_mul(qx, qx), sg_v16_mul(qy, qy)), sg_v16_mul(qz, qz));
+    const sg_v16 d2 = sg_v16_add(sg_v16_add(sg_v16_mul(dx, dx), sg_v16_mul(dy, dy)), sg_v16_mul(dz, dz));
+    /* the widest ray's sin^2 (the largest: the least of its negation) */
+    const float s2 = -sg_v16_min_lanes(sg_v16_sub(sg_v16_set1(0.0f), sg_v16_div(q2, d2)), 0xFFFFu);
+    const float s0 = sqrtf(s2 < 1.0f ? s2 : 1.0f), c0 = sqrtf(1.0f - s0 * s0);
+    /* the half-angle plus 1e-3 radians, by the angle-sum identities */
+    const float cd = 0.9999995f, sd = 9.9999983e-4f; /* cos, sin of 1e-3 */
+    const float cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
+    if (!(cw > 0.55f)) /* wider than about 1 radian: the test would reject little */
+        return;
+    P->cn.o[0] = b->ox[f];
+    P->cn.o[1] = b->oy[f];
+    P->cn.o[2] = b->oz[f];
+    memcpy(P->cn.a, a, sizeof a);
+    P->cn.sin = sw;
+    P->cn.cos = cw;
     P->cone = 1;
 }
 #endif
@@ -965,6 +983,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
     if (lanes) {
         psoa P;
         P.cull = 0;
+        P.eye = P.cone = 0;
         const int f = __builtin_ctz(lanes);
         for (int i = 0; i < PW; ++i) {
             const tray *ri = &r[lanes >> i & 1u ? i : f]; /* a ray outside: a copy, so lanes stay finite */
@@ -984,7 +1003,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
         }
 #if SG_BUNDLE_SIMD16
-        packet_cone(r, lanes, &P);
+        packet_cone(lanes, &P);
 #endif
         trace_packet(h, r, bst, &P, lanes, &c);
     }

@@ -68,7 +68,8 @@
  *                                  its single-ray hit bit for bit, through
  *                                  the hierarchy and through sg_scene.
  *     (kernels_agree also checks sg_bundle_test16, a node against 16
- *     rays, against the single ray's scalar test, ray by ray, and
+ *     rays, against the single ray's scalar test, ray by ray, with its
+ *     one-eye form sg_bundle_test16_eye for rays from one origin, and
  *     sg_bundle_cone_test, a bundle against a packet's cone, against its
  *     scalar reference and against rays inside the cone.)
  * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
@@ -796,6 +797,18 @@ static void test_hybrid_kernels_agree(void **state)
             unsigned la, lb;
             unsigned ma = sg_bundle_test16(B, l, &r16, tfar, ta, &la);
             unsigned mb = sg_bundle_test16_scalar(B, l, &r16, tfar, tb, &lb);
+            if (bi % 2) { /* one eye: the eye kernel gives the same bits */
+                float te[16];
+                unsigned le, me = sg_bundle_test16_eye(B, l, &r16, tfar, te, &le);
+                for (int i = 0; i < 16; ++i)
+                    if ((me >> i & 1u) != (ma >> i & 1u) ||
+                        ((ma >> i & 1u) && ((le >> i & 1u) != (la >> i & 1u) || memcmp(&te[i], &ta[i], 4) != 0))) {
+                        if (!rdiff)
+                            print_message("bundle %zu lane %d ray %d (one eye): entered %u / %u, tin %.9g / %.9g\n",
+                                          bi, l, i, me >> i & 1u, ma >> i & 1u, (double)te[i], (double)ta[i]);
+                        ++rdiff;
+                    }
+            }
             for (int i = 0; i < 16; ++i) {
                 unsigned lc;
                 unsigned mc = sg_bundle_test_scalar(B, &one[i], tfar[i], tc, &lc);
