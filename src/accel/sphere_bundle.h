@@ -235,6 +235,88 @@ static inline unsigned sg_bundle_test(const sg_stree_bundle *B, const sg_bundle_
 }
 #endif
 
+/* ---- A bundle against a cone of rays (a packet's) ---------------------------
+ *
+ * Which nodes of a bundle some ray of a cone may enter: rays that leave
+ * one apex o within half-angle a of the unit axis. A sphere (centre c,
+ * radius r) meets the cone when its centre lies in the cone of centres
+ * (the apex moved back along the axis by r / sin a) and is not behind
+ * the apex beyond r (Eberly, "Intersection of a sphere and a cone"). The
+ * radius is widened (r 1.001 + 1e-4 |c - o|_1) far beyond the rounding
+ * of this test and of the rays' own sphere tests, so a node a ray of the
+ * cone enters is never dropped. The slab is not used (the cone only
+ * skips nodes; the rays' own tests cut by the slab). An empty lane (r
+ * NaN) fails every comparison. A scalar reference and an AVX2 kernel
+ * (width 8) with the same operations in the same order: the same mask. */
+typedef struct sg_bundle_cone {
+    float o[3];         /* apex: the rays' common origin          */
+    float a[3];         /* unit axis                              */
+    float sin, cos;     /* of the half-angle, widened; sin > 0    */
+} sg_bundle_cone;
+
+static inline unsigned sg_bundle_cone_test_scalar(const sg_stree_bundle *B, const sg_bundle_cone *C)
+{
+    const float s2 = C->sin * C->sin, c2 = C->cos * C->cos, back = 1.0f / C->sin;
+    unsigned kids = 0;
+    for (int l = 0; l < SG_STREE_WIDTH; ++l) {
+        const float vx = B->cx[l] - C->o[0], vy = B->cy[l] - C->o[1], vz = B->cz[l] - C->o[2];
+        const float r = B->r[l] * 1.001f + 1e-4f * (fabsf(vx) + fabsf(vy) + fabsf(vz));
+        /* apex moved back along the axis by r / sin: the cone of centres */
+        const float rb = r * back;
+        const float ux = vx + rb * C->a[0], uy = vy + rb * C->a[1], uz = vz + rb * C->a[2];
+        const float e = ux * C->a[0] + uy * C->a[1] + uz * C->a[2];
+        const float u2 = ux * ux + uy * uy + uz * uz;
+        const float f = -(vx * C->a[0] + vy * C->a[1] + vz * C->a[2]);
+        const float v2 = vx * vx + vy * vy + vz * vz;
+        /* in the cone of centres, and not behind the apex beyond r */
+        const int in = e > 0.0f && e * e >= u2 * c2 && (!(f > 0.0f && f * f >= v2 * s2) || v2 <= r * r);
+        kids |= (unsigned)in << l;
+    }
+    return kids;
+}
+
+#if SG_BUNDLE_SIMD == 8
+static inline unsigned sg_bundle_cone_test(const sg_stree_bundle *B, const sg_bundle_cone *C)
+{
+    const float s2s = C->sin * C->sin, c2s = C->cos * C->cos, backs = 1.0f / C->sin;
+    const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
+    const __m256 ax = _mm256_set1_ps(C->a[0]), ay = _mm256_set1_ps(C->a[1]), az = _mm256_set1_ps(C->a[2]);
+    const __m256 vx = _mm256_sub_ps(_mm256_load_ps(B->cx), _mm256_set1_ps(C->o[0]));
+    const __m256 vy = _mm256_sub_ps(_mm256_load_ps(B->cy), _mm256_set1_ps(C->o[1]));
+    const __m256 vz = _mm256_sub_ps(_mm256_load_ps(B->cz), _mm256_set1_ps(C->o[2]));
+    const __m256 l1 = _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, vx), _mm256_andnot_ps(sign, vy)),
+                                    _mm256_andnot_ps(sign, vz));
+    const __m256 r = _mm256_add_ps(_mm256_mul_ps(_mm256_load_ps(B->r), _mm256_set1_ps(1.001f)),
+                                   _mm256_mul_ps(_mm256_set1_ps(1e-4f), l1));
+    const __m256 rb = _mm256_mul_ps(r, _mm256_set1_ps(backs));
+    const __m256 ux = _mm256_add_ps(vx, _mm256_mul_ps(rb, ax));
+    const __m256 uy = _mm256_add_ps(vy, _mm256_mul_ps(rb, ay));
+    const __m256 uz = _mm256_add_ps(vz, _mm256_mul_ps(rb, az));
+    const __m256 e = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ux, ax), _mm256_mul_ps(uy, ay)), _mm256_mul_ps(uz, az));
+    const __m256 u2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ux, ux), _mm256_mul_ps(uy, uy)), _mm256_mul_ps(uz, uz));
+    const __m256 f = _mm256_xor_ps(
+        sign, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vx, ax), _mm256_mul_ps(vy, ay)), _mm256_mul_ps(vz, az)));
+    const __m256 v2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vx, vx), _mm256_mul_ps(vy, vy)), _mm256_mul_ps(vz, vz));
+    const __m256 front = _mm256_and_ps(_mm256_cmp_ps(e, zero, _CMP_GT_OQ),
+                                       _mm256_cmp_ps(_mm256_mul_ps(e, e), _mm256_mul_ps(u2, _mm256_set1_ps(c2s)),
+                                                     _CMP_GE_OQ));
+    const __m256 behind = _mm256_and_ps(_mm256_cmp_ps(f, zero, _CMP_GT_OQ),
+                                        _mm256_cmp_ps(_mm256_mul_ps(f, f), _mm256_mul_ps(v2, _mm256_set1_ps(s2s)),
+                                                      _CMP_GE_OQ));
+    const __m256 near = _mm256_cmp_ps(v2, _mm256_mul_ps(r, r), _CMP_LE_OQ);
+    /* front && (!behind || near) */
+    const __m256 in = _mm256_and_ps(front, _mm256_or_ps(_mm256_andnot_ps(behind, _mm256_castsi256_ps(
+                                                                                      _mm256_set1_epi32(-1))),
+                                                        near));
+    return (unsigned)_mm256_movemask_ps(in);
+}
+#else
+static inline unsigned sg_bundle_cone_test(const sg_stree_bundle *B, const sg_bundle_cone *C)
+{
+    return sg_bundle_cone_test_scalar(B, C);
+}
+#endif
+
 /* ---- One node against sixteen rays (a 4x4 packet) --------------------------
  *
  * sg_bundle_test16 runs sg_bundle_test_scalar's operations for lane l of
@@ -311,10 +393,58 @@ static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const s
     *lod = sg_v16_lt(sg_v16_add(R, R), sg_v16_add(sg_v16_load(r->lod0), sg_v16_mul(sg_v16_load(r->lod1), b)));
     return hit;
 }
+
+/* sg_bundle_test16 for rays that all leave r->ox[0], r->oy[0], r->oz[0]
+ * (camera rays): what depends on the node and the origin only (a = c - o,
+ * the margin, a . u and the slab's numerators) is computed once, as a
+ * scalar, with the same operations, so each ray gets the same bits. */
+static inline unsigned sg_bundle_test16_eye(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                            const float tfar[16], float tin[16], unsigned *lod)
+{
+    const float ns = 1.0f / SG_STREE_NORMAL_SCALE, ss = 1.0f / SG_STREE_SLAB_SCALE;
+    const float Rs = B->r[l];
+    const float uxs = (float)B->nx[l] * ns, uys = (float)B->ny[l] * ns, uzs = (float)B->nz[l] * ns;
+    const float rss = Rs * ss;
+    const float axs = B->cx[l] - r->ox[0], ays = B->cy[l] - r->oy[0], azs = B->cz[l] - r->oz[0];
+    const float ms = SG_BUNDLE_MARGIN * (fabsf(axs) + fabsf(ays) + fabsf(azs) + Rs);
+    const float Rms = Rs + ms;
+    const float aus = axs * uxs + ays * uys + azs * uzs;
+    const sg_v16 dx = sg_v16_load(r->dx), dy = sg_v16_load(r->dy), dz = sg_v16_load(r->dz);
+    const sg_v16 ax = sg_v16_set1(axs), ay = sg_v16_set1(ays), az = sg_v16_set1(azs);
+    const sg_v16 b = sg_v16_add(sg_v16_add(sg_v16_mul(ax, dx), sg_v16_mul(ay, dy)), sg_v16_mul(az, dz));
+    const sg_v16 qx = sg_v16_sub(sg_v16_mul(ay, dz), sg_v16_mul(az, dy));
+    const sg_v16 qy = sg_v16_sub(sg_v16_mul(az, dx), sg_v16_mul(ax, dz));
+    const sg_v16 qz = sg_v16_sub(sg_v16_mul(ax, dy), sg_v16_mul(ay, dx));
+    const sg_v16 p2 = sg_v16_add(sg_v16_add(sg_v16_mul(qx, qx), sg_v16_mul(qy, qy)), sg_v16_mul(qz, qz));
+    const sg_v16 m = sg_v16_set1(ms);
+    const sg_v16 h2 = sg_v16_sub(sg_v16_set1(Rms * Rms), p2);
+    const sg_v16 hh = sg_v16_sqrt(sg_v16_pos(h2));
+    sg_v16 t0 = sg_v16_sub(sg_v16_sub(b, hh), m);
+    sg_v16 t1 = sg_v16_add(sg_v16_add(b, hh), m);
+    const sg_v16 du = sg_v16_add(sg_v16_add(sg_v16_mul(dx, sg_v16_set1(uxs)), sg_v16_mul(dy, sg_v16_set1(uys))),
+                                 sg_v16_mul(dz, sg_v16_set1(uzs)));
+    const sg_v16 inv = sg_v16_div(sg_v16_set1(1.0f), du);
+    const sg_v16 n0 = sg_v16_mul(sg_v16_set1((float)B->slo[l] * rss - ms + aus), inv);
+    const sg_v16 n1 = sg_v16_mul(sg_v16_set1((float)B->shi[l] * rss + ms + aus), inv);
+    const sg_v16 tn = sg_v16_min(n0, n1), tf = sg_v16_max(n0, n1);
+    t0 = sg_v16_max(tn, t0);
+    t1 = sg_v16_min(tf, t1);
+    sg_v16_store(tin, t0);
+    const unsigned hit = sg_v16_ge(h2, sg_v16_set1(0.0f)) & sg_v16_le(t0, t1) &
+                         sg_v16_ge(t1, sg_v16_load(r->tmin)) & sg_v16_le(t0, sg_v16_load(tfar));
+    const sg_v16 R = sg_v16_set1(Rs);
+    *lod = sg_v16_lt(sg_v16_add(R, R), sg_v16_add(sg_v16_load(r->lod0), sg_v16_mul(sg_v16_load(r->lod1), b)));
+    return hit;
+}
 #else
 #define SG_BUNDLE_SIMD16 0
 static inline unsigned sg_bundle_test16(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
                                         const float tfar[16], float tin[16], unsigned *lod)
+{
+    return sg_bundle_test16_scalar(B, l, r, tfar, tin, lod);
+}
+static inline unsigned sg_bundle_test16_eye(const sg_stree_bundle *B, int l, const sg_bundle_ray16 *r,
+                                            const float tfar[16], float tin[16], unsigned *lod)
 {
     return sg_bundle_test16_scalar(B, l, r, tfar, tin, lod);
 }

@@ -279,7 +279,10 @@ static inline void prefetch_visit(const sg_hybrid *h, uint32_t word)
 {
 #ifndef SG_HYBRID_NO_PREFETCH
     if (sg_stree_is_leaf(word)) {
-        __builtin_prefetch(h->tri + 3 * (size_t)sg_stree_leaf_first(word));
+        /* up to 8 triangles' ids, 96 bytes: their first and last lines */
+        const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+        __builtin_prefetch(h->tri + 3 * (size_t)first);
+        __builtin_prefetch(h->tri + 3 * (size_t)(first + count) - 1);
     } else {
         const char *nb = (const char *)&h->tree.bundles[word];
         for (size_t o = 0; o < sizeof(sg_stree_bundle); o += 64)
@@ -289,6 +292,15 @@ static inline void prefetch_visit(const sg_hybrid *h, uint32_t word)
     (void)h;
     (void)word;
 #endif
+}
+
+/* Prefetches the vertex positions of a leaf word's triangles (their ids
+ * are read, so they should be in cache: prefetch_visit). */
+static inline void prefetch_vertices(const sg_hybrid *h, uint32_t word)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
+        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
 }
 
 /* Children of bundle cb hit by the ray, nearest last (stack order).
@@ -566,40 +578,24 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
-    int cone;                   /* 1: the rays leave one origin within a cone   */
-    float co[3], ca[3];         /* its apex (the origin) and unit axis          */
-    float csin, ccos;           /* sine and cosine of its half-angle, widened   */
+    int eye;                    /* 1: every lane of br leaves one origin        */
+    int cone;                   /* 1: and its rays lie within cn                */
+    sg_bundle_cone cn;          /* apex (the origin), axis, half-angle widened  */
 } psoa;
 
 #if SG_BUNDLE_SIMD16
 /* The children of bundle B that some ray of the packet may enter: a
  * sphere that does not meet the packet's cone is entered by none of its
- * rays (Eberly's sphere-cone test, the radius and the cone widened far
- * beyond the rounding of either test), so its 16-ray test is skipped; it
- * would have come out 0 for every ray. Any ray order: all children. */
+ * rays (sg_bundle_cone_test, all eight children in one go), so its 16-ray
+ * test is skipped; it would have come out 0 for every ray. Any ray
+ * order: all children. */
 static unsigned cone_children(const sg_stree_bundle *B, const psoa *P)
 {
+    if (P->cone)
+        return sg_bundle_cone_test(B, &P->cn);
     unsigned kids = 0;
-    if (!P->cone) {
-        for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
-            kids |= 1u << l;
-        return kids;
-    }
-    const float s2 = P->csin * P->csin, c2 = P->ccos * P->ccos, back = 1.0f / P->csin;
-    for (int l = 0; l < W; ++l) {
-        const float vx = B->cx[l] - P->co[0], vy = B->cy[l] - P->co[1], vz = B->cz[l] - P->co[2];
-        const float r = B->r[l] * 1.001f + 1e-4f * (fabsf(vx) + fabsf(vy) + fabsf(vz));
-        /* apex moved back along the axis by r / sin: the cone of centres */
-        const float ux = vx + r * back * P->ca[0], uy = vy + r * back * P->ca[1], uz = vz + r * back * P->ca[2];
-        const float e = ux * P->ca[0] + uy * P->ca[1] + uz * P->ca[2];
-        const float u2 = ux * ux + uy * uy + uz * uz;
-        const float f = -(vx * P->ca[0] + vy * P->ca[1] + vz * P->ca[2]);
-        const float v2 = vx * vx + vy * vy + vz * vz;
-        /* in the cone of centres, and not behind the apex beyond r; NaN (an
-         * empty lane) fails */
-        const int in = e > 0.0f && e * e >= u2 * c2 && (!(f > 0.0f && f * f >= v2 * s2) || v2 <= r * r);
-        kids |= (unsigned)in << l;
-    }
+    for (int l = 0; l < W && B->child[l] != SG_STREE_EMPTY; ++l)
+        kids |= 1u << l;
     return kids;
 }
 #endif
@@ -624,7 +620,8 @@ static inline int order_children(const float key[W], unsigned any, int kids[W])
 /* Children of bundle cb that the rays in `lanes` enter, nearest (least
  * key) last; per ray, a point-sized child is decided here as push_children
  * decides it (disk hit, skipped, or opened). Returns how many were
- * written to out. */
+ * written to out. floor may lie in out[0] (the popped entry's slot): it is
+ * read in full before out is written, here and in push_children16. */
 static int push_children4(const sg_hybrid *h, uint32_t cb, const tray *r, best *bst, psoa *P, const float *floor,
                           unsigned lanes, pentry *out, counters *c)
 {
@@ -700,7 +697,9 @@ static int push_children16(const sg_hybrid *h, uint32_t cb, const tray *r, best 
         const int l = __builtin_ctz(kids);
         _Alignas(64) float tin[PW];
         unsigned lod;
-        const unsigned mask = sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod) & lanes;
+        const unsigned mask = (P->eye ? sg_bundle_test16_eye(B, l, &P->br, P->bt, tin, &lod)
+                                      : sg_bundle_test16(B, l, &P->br, P->bt, tin, &lod)) &
+                              lanes;
         if (!mask)
             continue;
         const sg_v16 f = sg_v16_max(sg_v16_load(tin), fl); /* tin > floor ? tin : floor */
@@ -817,8 +816,7 @@ static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *
 #ifndef SG_HYBRID_NO_PREFETCH
     /* every vertex of the leaf at once: their misses overlap instead of
      * each triangle's waiting on its own */
-    for (uint32_t j = 3 * first; j < 3 * (first + count); ++j)
-        __builtin_prefetch(h->pos + 3 * (size_t)h->tri[j]);
+    prefetch_vertices(h, word);
 #endif
     const sg_tri_ray *t0 = &r[f].tr;
     const int k[3] = {t0->kx, t0->ky, t0->kz};
@@ -859,21 +857,25 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
         root[i] = -INFINITY;
     int sp = push_packet(h, 0, r, bst, P, root, lanes, stack, c);
     while (sp > 0) {
-        const pentry e = stack[--sp];
-        const uint32_t k = e.id;
-        /* the rays whose floor is not beyond their best (e.t[i] > bst[i].t: pruned) */
-        unsigned go = e.lanes;
+        /* Read in place, not copied: a copy was stored in 16-byte pieces
+         * and loaded back 32 bytes at a time, which stalls every pop on
+         * store forwarding. The children are written over this slot, but
+         * push_packet reads the floors (e->t) before it writes an entry. */
+        const pentry *e = &stack[--sp];
+        const uint32_t k = e->id;
+        /* the rays whose floor is not beyond their best (e->t[i] > bst[i].t: pruned) */
+        unsigned go = e->lanes;
 #if SG_BUNDLE_SIMD16
-        go &= ~sg_v16_gt(sg_v16_load(e.t), sg_v16_load(P->bt));
+        go &= ~sg_v16_gt(sg_v16_load(e->t), sg_v16_load(P->bt));
 #else
-        for (unsigned m = e.lanes; m; m &= m - 1)
-            if (e.t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
+        for (unsigned m = e->lanes; m; m &= m - 1)
+            if (e->t[__builtin_ctz(m)] > bst[__builtin_ctz(m)].t)
                 go &= ~(1u << __builtin_ctz(m));
 #endif
         /* lod 0: only a cull (NODE_SKIP) or NODE_OPEN comes back */
         for (unsigned m = go & P->cull; m; m &= m - 1) {
             const int i = __builtin_ctz(m);
-            if (node_point(h, k, &r[i], &bst[i], 0, e.t[i], c) == NODE_SKIP)
+            if (node_point(h, k, &r[i], &bst[i], 0, e->t[i], c) == NODE_SKIP)
                 go &= ~(1u << i);
         }
         if (!go)
@@ -881,6 +883,16 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
         c->pops++;
         const uint32_t word = h->tree.bundles[k / W].child[k % W];
         if (sg_stree_is_leaf(word)) {
+#ifndef SG_HYBRID_NO_PREFETCH
+            /* The next entry's vertices while this leaf is tested: their
+             * ids came in when it was pushed, and the positions, which
+             * need the ids, were asked for only as its test began. */
+            if (sp > 0) {
+                const uint32_t nk = stack[sp - 1].id, nword = h->tree.bundles[nk / W].child[nk % W];
+                if (sg_stree_is_leaf(nword))
+                    prefetch_vertices(h, nword);
+            }
+#endif
 #if SG_V16_SIMD
             test_leaf16(h, word, r, bst, P, go, c);
 #else
@@ -889,50 +901,65 @@ static void trace_packet(const sg_hybrid *h, const tray *r, best *bst, psoa *P, 
                 P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
 #endif
         } else {
-            sp += push_packet(h, word, r, bst, P, e.t, go, stack + sp, c);
+            sp += push_packet(h, word, r, bst, P, e->t, go, stack + sp, c);
         }
     }
 }
 
 /* The packet's cone (psoa), when its rays leave one origin: the axis is
- * their mean direction and the half-angle the widest ray's, in double,
- * widened by 1e-3 radians (far beyond the rounding to float). */
+ * their mean direction (the lanes of br, copies included: any axis
+ * will do, the half-angle is measured against the one stored) and the
+ * half-angle the widest ray's, widened by 1e-3 radians. In float, across
+ * the lanes: the angle comes from its sine |a x d| / |d|, which float
+ * gives within about 1e-6 radians even for parallel rays (a cosine near 1
+ * would lose it), far below the widening. */
 #if SG_BUNDLE_SIMD16
-static void packet_cone(const tray *r, unsigned lanes, psoa *P)
+static void packet_cone(unsigned lanes, psoa *P)
 {
+    const sg_bundle_ray16 *b = &P->br;
     const int f = __builtin_ctz(lanes);
-    double a[3] = {0.0, 0.0, 0.0};
-    P->cone = 0;
-    for (unsigned m = lanes; m; m &= m - 1) {
-        const tray *ri = &r[__builtin_ctz(m)];
-        if (memcmp(ri->o, r[f].o, sizeof ri->o) != 0)
-            return;
-        for (int q = 0; q < 3; ++q)
-            a[q] += ri->d[q];
-    }
-    const double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    if (!(len > 0.0))
+    P->eye = P->cone = 0;
+    /* lanes outside the packet are copies of ray f */
+    if (sg_v16_neq(sg_v16_load(b->ox), sg_v16_set1(b->ox[f])) |
+        sg_v16_neq(sg_v16_load(b->oy), sg_v16_set1(b->oy[f])) |
+        sg_v16_neq(sg_v16_load(b->oz), sg_v16_set1(b->oz[f])))
         return;
-    double cmin = 1.0;
-    for (unsigned m = lanes; m; m &= m - 1) {
-        const tray *ri = &r[__builtin_ctz(m)];
-        const double dl = sqrt((double)ri->d[0] * ri->d[0] + (double)ri->d[1] * ri->d[1] + (double)ri->d[2] * ri->d[2]);
-        const double c = (a[0] * ri->d[0] + a[1] * ri->d[1] + a[2] * ri->d[2]) / (len * dl);
-        cmin = c < cmin ? c : cmin;
+    P->eye = 1;
+    float a[3] = {0.0f, 0.0f, 0.0f};
+    for (int i = 0; i < PW; ++i) {
+        a[0] += b->dx[i];
+        a[1] += b->dy[i];
+        a[2] += b->dz[i];
     }
-    /* the half-angle plus 1e-3 radians, by the angle-sum identities (no
-     * acos, sin, cos a packet) */
-    const double c0 = cmin > 1.0 ? 1.0 : cmin, s0 = sqrt(1.0 - c0 * c0);
-    const double cd = 0.9999995000000417, sd = 9.999998333333417e-4; /* cos, sin of 1e-3 */
-    const double cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
-    if (!(cw > 0.55)) /* wider than about 1 radian: the test would reject little */
+    const float len = sqrtf(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (!(len > 0.0f))
         return;
-    for (int q = 0; q < 3; ++q) {
-        P->co[q] = r[f].o[q];
-        P->ca[q] = (float)(a[q] / len);
-    }
-    P->csin = (float)sw;
-    P->ccos = (float)cw;
+    for (int q = 0; q < 3; ++q)
+        a[q] /= len;
+    const sg_v16 dx = sg_v16_load(b->dx), dy = sg_v16_load(b->dy), dz = sg_v16_load(b->dz);
+    const sg_v16 ax = sg_v16_set1(a[0]), ay = sg_v16_set1(a[1]), az = sg_v16_set1(a[2]);
+    const sg_v16 dot = sg_v16_add(sg_v16_add(sg_v16_mul(ax, dx), sg_v16_mul(ay, dy)), sg_v16_mul(az, dz));
+    if (sg_v16_gt(dot, sg_v16_set1(0.0f)) != 0xFFFFu)
+        return; /* a ray at 90 degrees or more from the axis (or NaN) */
+    const sg_v16 qx = sg_v16_sub(sg_v16_mul(ay, dz), sg_v16_mul(az, dy));
+    const sg_v16 qy = sg_v16_sub(sg_v16_mul(az, dx), sg_v16_mul(ax, dz));
+    const sg_v16 qz = sg_v16_sub(sg_v16_mul(ax, dy), sg_v16_mul(ay, dx));
+    const sg_v16 q2 = sg_v16_add(sg_v16_add(sg_v16_mul(qx, qx), sg_v16_mul(qy, qy)), sg_v16_mul(qz, qz));
+    const sg_v16 d2 = sg_v16_add(sg_v16_add(sg_v16_mul(dx, dx), sg_v16_mul(dy, dy)), sg_v16_mul(dz, dz));
+    /* the widest ray's sin^2 (the largest: the least of its negation) */
+    const float s2 = -sg_v16_min_lanes(sg_v16_sub(sg_v16_set1(0.0f), sg_v16_div(q2, d2)), 0xFFFFu);
+    const float s0 = sqrtf(s2 < 1.0f ? s2 : 1.0f), c0 = sqrtf(1.0f - s0 * s0);
+    /* the half-angle plus 1e-3 radians, by the angle-sum identities */
+    const float cd = 0.9999995f, sd = 9.9999983e-4f; /* cos, sin of 1e-3 */
+    const float cw = c0 * cd - s0 * sd, sw = s0 * cd + c0 * sd;
+    if (!(cw > 0.55f)) /* wider than about 1 radian: the test would reject little */
+        return;
+    P->cn.o[0] = b->ox[f];
+    P->cn.o[1] = b->oy[f];
+    P->cn.o[2] = b->oz[f];
+    memcpy(P->cn.a, a, sizeof a);
+    P->cn.sin = sw;
+    P->cn.cos = cw;
     P->cone = 1;
 }
 #endif
@@ -956,6 +983,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
     if (lanes) {
         psoa P;
         P.cull = 0;
+        P.eye = P.cone = 0;
         const int f = __builtin_ctz(lanes);
         for (int i = 0; i < PW; ++i) {
             const tray *ri = &r[lanes >> i & 1u ? i : f]; /* a ray outside: a copy, so lanes stay finite */
@@ -975,7 +1003,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
         }
 #if SG_BUNDLE_SIMD16
-        packet_cone(r, lanes, &P);
+        packet_cone(lanes, &P);
 #endif
         trace_packet(h, r, bst, &P, lanes, &c);
     }

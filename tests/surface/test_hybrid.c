@@ -68,7 +68,10 @@
  *                                  its single-ray hit bit for bit, through
  *                                  the hierarchy and through sg_scene.
  *     (kernels_agree also checks sg_bundle_test16, a node against 16
- *     rays, against the single ray's scalar test, ray by ray.)
+ *     rays, against the single ray's scalar test, ray by ray, with its
+ *     one-eye form sg_bundle_test16_eye for rays from one origin, and
+ *     sg_bundle_cone_test, a bundle against a packet's cone, against its
+ *     scalar reference and against rays inside the cone.)
  * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
  *                                  sixteen rays (sg_hybrid_intersect16,
  *                                  sg_scene_intersect16), with edge and
@@ -794,6 +797,18 @@ static void test_hybrid_kernels_agree(void **state)
             unsigned la, lb;
             unsigned ma = sg_bundle_test16(B, l, &r16, tfar, ta, &la);
             unsigned mb = sg_bundle_test16_scalar(B, l, &r16, tfar, tb, &lb);
+            if (bi % 2) { /* one eye: the eye kernel gives the same bits */
+                float te[16];
+                unsigned le, me = sg_bundle_test16_eye(B, l, &r16, tfar, te, &le);
+                for (int i = 0; i < 16; ++i)
+                    if ((me >> i & 1u) != (ma >> i & 1u) ||
+                        ((ma >> i & 1u) && ((le >> i & 1u) != (la >> i & 1u) || memcmp(&te[i], &ta[i], 4) != 0))) {
+                        if (!rdiff)
+                            print_message("bundle %zu lane %d ray %d (one eye): entered %u / %u, tin %.9g / %.9g\n",
+                                          bi, l, i, me >> i & 1u, ma >> i & 1u, (double)te[i], (double)ta[i]);
+                        ++rdiff;
+                    }
+            }
             for (int i = 0; i < 16; ++i) {
                 unsigned lc;
                 unsigned mc = sg_bundle_test_scalar(B, &one[i], tfar[i], tc, &lc);
@@ -816,6 +831,50 @@ static void test_hybrid_kernels_agree(void **state)
     if (rdiff)
         fail_msg("bundles x 16 rays: %zu ray-node tests differ from the single ray's", rdiff);
     assert_true(rentered > 1000 && rpoints > 10);
+
+    /* A bundle against a packet's cone (sg_bundle_cone_test) is its scalar
+     * reference, and never drops a child that a ray inside the cone enters:
+     * eight cones a bundle, of half-angle 0.5 to 15 degrees, aimed near a
+     * child; centres with empty lanes (NaN) aim NaN cones, which both must
+     * treat alike. */
+    size_t cdiff = 0, cmissed = 0, cin = 0, cout = 0;
+    for (size_t bi = 0; bi < 8 * h->tree.bundle_count; ++bi) {
+        const sg_stree_bundle *B = &h->tree.bundles[bi / 8];
+        int l = (int)(bi % SG_STREE_WIDTH);
+        sg_vec3 c = sg_v3(B->cx[l], B->cy[l], B->cz[l]);
+        sg_vec3 o = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
+        sg_vec3 a = sg_v3_normalize(sg_v3_add(sg_v3_sub(c, o), sg_v3_scale(sg_test_random_dir(&rng), 0.2f)));
+        float ang = (0.5f + 14.5f * sg_test_rand01(&rng)) * 3.14159265f / 180.0f;
+        sg_bundle_cone C = {.o = {o.x, o.y, o.z}, .a = {a.x, a.y, a.z}, .sin = sinf(ang), .cos = cosf(ang)};
+        unsigned ka = sg_bundle_cone_test(B, &C), kb = sg_bundle_cone_test_scalar(B, &C);
+        if (ka != kb) {
+            if (!cdiff)
+                print_message("bundle %zu: cone children 0x%02x (SIMD) / 0x%02x (scalar)\n", bi / 8, ka, kb);
+            ++cdiff;
+        }
+        cin += (size_t)__builtin_popcount(ka);
+        for (int q = 0; q < SG_STREE_WIDTH; ++q)
+            cout += (size_t)(B->r[q] == B->r[q] && !(ka >> q & 1u));
+        /* rays inside the cone (the axis tilted by less than ang) */
+        for (int k = 0; k < 4; ++k) {
+            sg_vec3 d = sg_v3_normalize(sg_v3_add(a, sg_v3_scale(sg_test_random_dir(&rng), 0.9f * sinf(ang))));
+            if (sg_v3_dot(d, a) < cosf(ang))
+                continue;
+            sg_bundle_ray br = {.o = {o.x, o.y, o.z}, .d = {d.x, d.y, d.z}, .tmin = 0.0f};
+            float tin[SG_STREE_WIDTH];
+            unsigned lod, entered_by = sg_bundle_test_scalar(B, &br, INFINITY, tin, &lod);
+            if (entered_by & ~(ka & kb)) {
+                if (!cmissed)
+                    print_message("bundle %zu: a ray in the cone enters 0x%02x, the cone keeps 0x%02x / 0x%02x\n",
+                                  bi / 8, entered_by, ka, kb);
+                ++cmissed;
+            }
+        }
+    }
+    print_message("bundles against cones: %zu children kept, %zu skipped\n", cin, cout);
+    if (cdiff || cmissed)
+        fail_msg("cones: %zu masks differ between SIMD and scalar, %zu drop a child a ray enters", cdiff, cmissed);
+    assert_true(cin > 100 && cout > 100);
     sg_hybrid_destroy(h);
     sg_mesh_free(&m);
 }
