@@ -744,10 +744,16 @@ static inline stack_entry child_entry(const iso_node *N, const uint32_t base[3],
  * hottest instruction (a cache miss; perf, 1M-point dragon). */
 static inline void prefetch_cell(const sg_iso *iso, const stack_entry *ce)
 {
-    if (ce->is_leaf == CELL_LEAF)
-        __builtin_prefetch(&iso->leaves[ce->index]);
-    else if (ce->is_leaf == CELL_NODE)
-        __builtin_prefetch(&iso->nodes[ce->index].lod);
+    /* both ends: half of the 36-byte records straddle two cache lines */
+    if (ce->is_leaf == CELL_LEAF) {
+        const char *p = (const char *)&iso->leaves[ce->index];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + sizeof(iso_leaf) - 1);
+    } else if (ce->is_leaf == CELL_NODE) {
+        const char *p = (const char *)&iso->nodes[ce->index];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + sizeof(iso_node) - 1);
+    }
 }
 
 static void ray_state_init(ray_state *rs, const sg_ray *ray)
