@@ -49,10 +49,11 @@ static const char usage[] =
     "  --lod LIST       level-of-detail thresholds (pixels) to time against full\n"
     "                   detail, comma-separated (default 0.5,1,2,4; none: \"\")\n"
     "  --csv PATH       append rows (default out/bench_iso/bench_iso.csv)\n"
-    "The ISO casts twice per view: one ray at a time (sg_iso_intersect) and as\n"
-    "2x2 quads of pixels (sg_iso_intersect4, the viewer's path); both give the\n"
-    "same hits, and the printed hit checksum (FNV-1a over each pixel's hit flag\n"
-    "and t) lets two builds of the code be compared for identical results.\n";
+    "The ISO casts three times per view: one ray at a time (sg_iso_intersect),\n"
+    "as 2x2 quads of pixels (sg_iso_intersect4) and as 4x4 blocks\n"
+    "(sg_iso_intersect16, the viewer's path); all give the same hits, and the\n"
+    "printed hit checksum (FNV-1a over each pixel's hit flag and t) lets two\n"
+    "builds of the code be compared for identical results.\n";
 
 typedef struct frame {
     double wall, cpu;     /* best frame                               */
@@ -61,12 +62,14 @@ typedef struct frame {
 
 /* Casts every pixel's ray through the ISO (iso != NULL) or the scene;
  * keeps hit flags and t of the last frame. quads: the ISO's rays as 2x2
- * quads of pixels through sg_iso_intersect4 (size must be even). */
+ * quads of pixels through sg_iso_intersect4 (2; size even) or 4x4 blocks
+ * through sg_iso_intersect16 (4, the viewer's path; size a multiple of 4);
+ * 0: one at a time. */
 static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam, int size, int threads, int frames,
                   int quads, uint8_t *hit, float *t, uint32_t *leaf)
 {
     frame best = {.wall = INFINITY};
-    int n = size * size, half = size / 2;
+    int n = size * size;
     for (int f = 0; f < frames; ++f) {
         sg_ray_stats total = {0};
         double w0 = omp_get_wtime(), c0 = bench_cpu_seconds();
@@ -74,18 +77,21 @@ static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam
         {
             sg_ray_stats st = {0};
             if (quads) {
-#pragma omp for schedule(dynamic, 64)
-                for (int q = 0; q < half * half; ++q) {
-                    int px[4], py[4];
-                    sg_ray r[4];
-                    sg_hit h[4];
-                    for (int k = 0; k < 4; ++k) {
-                        px[k] = 2 * (q % half) + (k & 1);
-                        py[k] = 2 * (q / half) + (k >> 1);
+                /* side x side blocks, row-major as the viewer's 4 x 4 */
+                int side = quads == 4 ? 4 : 2, per = size / side;
+#pragma omp for schedule(dynamic, 16)
+                for (int q = 0; q < per * per; ++q) {
+                    int px[16], py[16], nr = side * side;
+                    sg_ray r[16];
+                    sg_hit h[16];
+                    for (int k = 0; k < nr; ++k) {
+                        px[k] = side * (q % per) + k % side;
+                        py[k] = side * (q / per) + k / side;
                         r[k] = sg_camera_ray(cam, (float)px[k] + 0.5f, (float)py[k] + 0.5f, size, size);
                     }
-                    unsigned got = sg_iso_intersect4(iso, r, 15u, h, &st);
-                    for (int k = 0; k < 4; ++k) {
+                    unsigned got = side == 4 ? sg_iso_intersect16(iso, r, 0xFFFFu, h, &st)
+                                             : sg_iso_intersect4(iso, r, 15u, h, &st);
+                    for (int k = 0; k < nr; ++k) {
                         int i = py[k] * size + px[k], g = (int)(got >> k & 1u);
                         hit[i] = (uint8_t)g;
                         t[i] = g ? h[k].t : 0.0f;
@@ -118,7 +124,7 @@ static frame cast(const sg_scene *scene, const sg_iso *iso, const sg_camera *cam
     return best;
 }
 
-/* Level of detail against full detail (the quads' frame with lod 0: hit
+/* Level of detail against full detail (the blocks' frame with lod 0: hit
  * flags h0, distances t0), one line per threshold of list: CPU s per frame,
  * node steps and leaves per ray, pixels whose hit-or-miss differs, and
  * the mean and largest |dt| / t of common hits (the hit moves by at most
@@ -138,7 +144,7 @@ static void lod_sweep(sg_iso *iso, const sg_camera *cam, int size, int threads, 
         return;
     }
     double r0 = st0.rays ? (double)st0.rays : 1.0;
-    printf("  level of detail (2x2 quads; lod 0 = full detail):\n");
+    printf("  level of detail (4x4 blocks; lod 0 = full detail):\n");
     printf("  %8s %10s %8s %10s %10s %10s %12s %12s\n", "lod px", "CPU s", "speedup", "nodes/ray",
            "leaves/ray", "hit/miss", "mean dt/t", "max dt/t");
     printf("  %8s %10.4f %8.2f %10.2f %10.3f %10s %12s %12s\n", "0", cpu0, 1.0, (double)st0.nodes / r0,
@@ -149,7 +155,7 @@ static void lod_sweep(sg_iso *iso, const sg_camera *cam, int size, int threads, 
         if (end == c || !(lod >= 0.0f))
             break;
         sg_iso_set_lod(iso, lod);
-        frame fl = cast(NULL, iso, cam, size, threads, frames, 1, h, t, NULL);
+        frame fl = cast(NULL, iso, cam, size, threads, frames, 4, h, t, NULL);
         int differ = 0, both = 0;
         double sum = 0.0, worst = 0.0;
         for (int i = 0; i < n; ++i) {
@@ -228,8 +234,8 @@ int main(int argc, char **argv)
             else return bench_fail("bench_iso", "unknown option %s\n%s", a, usage);
         }
     }
-    if (points == 0 || size < 2 || size % 2 || frames < 1 || threads < 1)
-        return bench_fail("bench_iso", "--points, --frames and --threads must be positive, --size even");
+    if (points == 0 || size < 4 || size % 4 || frames < 1 || threads < 1)
+        return bench_fail("bench_iso", "--points, --frames and --threads must be positive, --size a multiple of 4");
     idesc.threads = threads;
 
     char machine[256], command[1024] = "";
@@ -315,10 +321,12 @@ int main(int argc, char **argv)
         if (scene)
             fm = cast(scene, NULL, &cams[v], size, threads, frames, 0, ha, ta, NULL);
         frame fi = cast(NULL, iso, &cams[v], size, threads, frames, 0, hb, tb, lb);
-        frame fq = cast(NULL, iso, &cams[v], size, threads, frames, 1, hq, tq, NULL);
+        frame fq = cast(NULL, iso, &cams[v], size, threads, frames, 2, hq, tq, NULL);
         uint64_t sum_single = hit_checksum(hb, tb, n), sum_quads = hit_checksum(hq, tq, n);
+        frame fx = cast(NULL, iso, &cams[v], size, threads, frames, 4, hq, tq, NULL);
+        uint64_t sum_blocks = hit_checksum(hq, tq, n);
         sg_iso_set_lod(iso, 0.0f);
-        frame f0 = cast(NULL, iso, &cams[v], size, threads, frames, 1, hq, tq, NULL);
+        frame f0 = cast(NULL, iso, &cams[v], size, threads, frames, 4, hq, tq, NULL);
         sg_iso_set_lod(iso, SG_ISO_LOD_DEFAULT);
         int same = 0, both = 0;
         for (int i = 0; i < n; ++i) {
@@ -334,9 +342,11 @@ int main(int argc, char **argv)
                (int)fm.stats.hits, (int)fi.stats.hits, frames);
         printf("%-28s %14.2f %14.2f   ISO/MLS %.2f\n", "Mrays/s (wall)", mm, mi, mi / mm);
         printf("%-28s %14.3f %14.3f\n", "CPU s per frame", fm.cpu, fi.cpu);
-        printf("%-28s %14s %14.3f   (2x2 quads, the viewer's path)\n", "CPU s per frame, quads", "", fq.cpu);
-        printf("%-28s %14s %014llx  %s\n", "ISO hit checksum", "", (unsigned long long)sum_single,
-               sum_single == sum_quads ? "(quads: the same)" : "(QUADS DIFFER)");
+        printf("%-28s %14s %14.3f   (2x2 quads)\n", "CPU s per frame, quads", "", fq.cpu);
+        printf("%-28s %14s %14.3f   (4x4 blocks, the viewer's path)\n", "CPU s per frame, blocks", "", fx.cpu);
+        printf("%-28s %14s %014llx  %s %s\n", "ISO hit checksum", "", (unsigned long long)sum_single,
+               sum_single == sum_quads ? "(quads: the same)" : "(QUADS DIFFER)",
+               sum_single == sum_blocks ? "(blocks: the same)" : "(BLOCKS DIFFER)");
         printf("%-28s %14.1f %14.1f\n", "nodes per ray", (double)fm.stats.nodes / rm, (double)fi.stats.nodes / ri);
         printf("%-28s %14.1f %14.1f\n", "leaves per ray", (double)fm.stats.leaves / rm, (double)fi.stats.leaves / ri);
         printf("%-28s %14.1f %14.1f\n", "leaf tests per ray", (double)fm.stats.isects / rm,

@@ -40,6 +40,7 @@
 #endif
 
 #include "core/alloc.h"
+#include "math/v16.h"
 #include "surface/iso_int.h"
 
 /* |cos| between the ray and a normal turned to its crossing's side. */
@@ -743,10 +744,16 @@ static inline stack_entry child_entry(const iso_node *N, const uint32_t base[3],
  * hottest instruction (a cache miss; perf, 1M-point dragon). */
 static inline void prefetch_cell(const sg_iso *iso, const stack_entry *ce)
 {
-    if (ce->is_leaf == CELL_LEAF)
-        __builtin_prefetch(&iso->leaves[ce->index]);
-    else if (ce->is_leaf == CELL_NODE)
-        __builtin_prefetch(&iso->nodes[ce->index].lod);
+    /* both ends: half of the 36-byte records straddle two cache lines */
+    if (ce->is_leaf == CELL_LEAF) {
+        const char *p = (const char *)&iso->leaves[ce->index];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + sizeof(iso_leaf) - 1);
+    } else if (ce->is_leaf == CELL_NODE) {
+        const char *p = (const char *)&iso->nodes[ce->index];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + sizeof(iso_node) - 1);
+    }
 }
 
 static void ray_state_init(ray_state *rs, const sg_ray *ray)
@@ -1108,6 +1115,274 @@ static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, s
     return found;
 }
 #endif
+
+/* ---- packets of sixteen ------------------------------------------------------ */
+
+/* trace4 made sixteen lanes wide (a 4 x 4 block of camera rays): one
+ * node's record, fetched once, serves every ray of the block still
+ * crossing it, where quads fetched it once per quad (the records are cache
+ * misses: docs/iso.md, "Where it falls short"). Each lane computes trace4's
+ * expressions in its order with the sg_v16 operations (math/v16.h: the
+ * scalar rounding, min/max as _mm_min_ps/_mm_max_ps), so each ray gets its
+ * single-ray hit bit for bit. Rays parallel to an axis's planes are left
+ * to the single-ray path (their half intervals need a per-lane select;
+ * camera rays almost never have a zero component). */
+#if SG_V16_SIMD
+typedef struct packet16_entry {
+    sg_v16 t0, t1;
+    uint32_t index, x, y, z;
+    uint16_t active; /* rays crossing the cell */
+    uint8_t level, kind;
+} packet16_entry;
+
+/* The per-axis constants of sixteen rays, lane r = rays[r]; the lanes of
+ * rays not traced are zero (their values are computed and never read). */
+typedef struct packet16_geom {
+    sg_v16 od[3], inv[3], dir[3];
+} packet16_geom;
+
+/* packet_slab_skips for sixteen lanes. */
+static inline unsigned packet16_slab_skips(const packet16_geom *pg, const iso_lod *D, sg_vec3 n, ray_state *rs,
+                                           unsigned act, sg_v16 t0, sg_v16 t1)
+{
+    const sg_v16 nx = sg_v16_set1(n.x), ny = sg_v16_set1(n.y), nz = sg_v16_set1(n.z);
+    sg_v16 px = sg_v16_mul(nx, pg->od[0]), py = sg_v16_mul(ny, pg->od[1]), pz = sg_v16_mul(nz, pg->od[2]);
+    sg_v16 s0 = sg_v16_add(sg_v16_add(px, py), pz);
+    sg_v16 sd = sg_v16_add(sg_v16_add(sg_v16_mul(nx, pg->dir[0]), sg_v16_mul(ny, pg->dir[1])),
+                           sg_v16_mul(nz, pg->dir[2]));
+    sg_v16 a = sg_v16_add(s0, sg_v16_mul(sd, t0)), b = sg_v16_add(s0, sg_v16_mul(sd, t1));
+    sg_v16 sum = sg_v16_add(sg_v16_add(sg_v16_add(sg_v16_abs(px), sg_v16_abs(py)), sg_v16_abs(pz)), t1);
+    sg_v16 m = sg_v16_mul(sg_v16_set1(8.0f * FLT_EPSILON), sum);
+    unsigned up = sg_v16_gt(sg_v16_min(b, a), sg_v16_add(sg_v16_set1(D->s_hi), m));
+    unsigned off = (up | sg_v16_lt(sg_v16_max(b, a), sg_v16_sub(sg_v16_set1(D->s_lo), m))) & act;
+    unsigned skip = 0;
+    for (unsigned q = off; q; q &= q - 1) {
+        int r = __builtin_ctz(q);
+        if (slab_off_skips(D, &rs[r], (int)(up >> r & 1u)))
+            skip |= 1u << r;
+    }
+    return skip;
+}
+
+/* packet_half_intervals for sixteen lanes, none parallel to a plane. */
+static inline void packet16_half_intervals(const packet16_geom *pg, const float p[3][3], sg_v16 ilo[3][2],
+                                           sg_v16 ihi[3][2])
+{
+    for (int a = 0; a < 3; ++a) {
+        sg_v16 o = pg->od[a], inv = pg->inv[a];
+        sg_v16 ta = sg_v16_mul(sg_v16_sub(sg_v16_set1(p[a][0]), o), inv);
+        sg_v16 tm = sg_v16_mul(sg_v16_sub(sg_v16_set1(p[a][1]), o), inv);
+        sg_v16 tb = sg_v16_mul(sg_v16_sub(sg_v16_set1(p[a][2]), o), inv);
+        ilo[a][0] = sg_v16_min(tm, ta);
+        ihi[a][0] = sg_v16_max(tm, ta);
+        ilo[a][1] = sg_v16_min(tb, tm);
+        ihi[a][1] = sg_v16_max(tb, tm);
+    }
+}
+
+/* packet_patch_ray for sixteen lanes; pr[r] is written for the lanes of
+ * act only. */
+/* Short names for the cubic's long sums below (no contraction). */
+static inline sg_v16 wmul(sg_v16 a, sg_v16 b) { return sg_v16_mul(a, b); }
+static inline sg_v16 wadd(sg_v16 a, sg_v16 b) { return sg_v16_add(a, b); }
+
+static inline void packet16_patch_ray(const patch *P, sg_aabb b, const packet16_geom *pg, sg_v16 T0, sg_v16 T1,
+                                      unsigned act, patch_ray pr[16])
+{
+    const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    sg_v16 S = sg_v16_sub(T1, T0), loc[3], rate[3];
+    for (int a = 0; a < 3; ++a) {
+        sg_v16 h = sg_v16_set1(hi[a] - lo[a]);
+        sg_v16 e = sg_v16_add(pg->od[a], sg_v16_mul(pg->dir[a], T0));
+        loc[a] = sg_v16_div(sg_v16_sub(e, sg_v16_set1(lo[a])), h);
+        rate[a] = sg_v16_div(sg_v16_mul(pg->dir[a], S), h);
+    }
+    sg_v16 u = loc[0], w = loc[1], z = loc[2], bu = rate[0], bw = rate[1], bz = rate[2];
+    sg_v16 k1 = sg_v16_set1(P->k[1]), k2 = sg_v16_set1(P->k[2]), k3 = sg_v16_set1(P->k[3]);
+    sg_v16 k4 = sg_v16_set1(P->k[4]), k5 = sg_v16_set1(P->k[5]), k6 = sg_v16_set1(P->k[6]);
+    sg_v16 k7 = sg_v16_set1(P->k[7]);
+    sg_v16 a0 = wadd(wadd(wadd(wadd(wadd(wadd(wadd(sg_v16_set1(P->v[0]), wmul(k1, u)), wmul(k2, w)), wmul(k3, z)), wmul(wmul(k4, u), w)), wmul(wmul(k5, w), z)),
+                    wmul(wmul(k6, u), z)),
+                  wmul(wmul(wmul(k7, u), w), z));
+    sg_v16 a1 = wadd(wadd(wadd(wadd(wadd(wadd(wmul(k1, bu), wmul(k2, bw)), wmul(k3, bz)), wmul(k4, wadd(wmul(u, bw), wmul(w, bu)))), wmul(k5, wadd(wmul(w, bz), wmul(z, bw)))),
+                    wmul(k6, wadd(wmul(u, bz), wmul(z, bu)))),
+                  wmul(k7, wadd(wadd(wmul(wmul(bu, w), z), wmul(wmul(u, bw), z)), wmul(wmul(u, w), bz))));
+    sg_v16 a2 = wadd(wadd(wadd(wmul(wmul(k4, bu), bw), wmul(wmul(k5, bw), bz)), wmul(wmul(k6, bu), bz)),
+                  wmul(k7, wadd(wadd(wmul(wmul(bu, bw), z), wmul(wmul(bu, w), bz)), wmul(wmul(u, bw), bz))));
+    sg_v16 a3 = wmul(wmul(wmul(k7, bu), bw), bz);
+    float f[10][16];
+    sg_v16_store(f[0], u), sg_v16_store(f[1], w), sg_v16_store(f[2], z);
+    sg_v16_store(f[3], bu), sg_v16_store(f[4], bw), sg_v16_store(f[5], bz);
+    sg_v16_store(f[6], a0), sg_v16_store(f[7], a1), sg_v16_store(f[8], a2), sg_v16_store(f[9], a3);
+    for (unsigned m = act; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        pr[r] = (patch_ray){f[0][r], f[1][r], f[2][r], f[3][r], f[4][r], f[5][r], {f[6][r], f[7][r], f[8][r], f[9][r]}};
+    }
+}
+
+/* The rays of mask (bits 0-15) down one traversal: they share their
+ * direction signs and none is parallel to an axis's planes. */
+static unsigned trace16(const sg_iso *iso, const sg_ray *rays, unsigned mask, sg_hit *hits, sg_ray_stats *stats)
+{
+    ray_state rs[16];
+    float r0[16] = {0}, r1[16] = {0}, lod_w[16] = {0};
+    float od[3][16] = {{0}}, inv[3][16] = {{0}}, dir[3][16] = {{0}};
+    unsigned active = 0, found = 0, either = 0, octant = 0;
+    uint64_t nodes[16] = {0}, leaves[16] = {0};
+    int lod_any = 0;
+    for (unsigned m = mask; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        ray_geom g;
+        ray_state_init(&rs[r], &rays[r]);
+        lod_w[r] = iso->lod_px * rays[r].spread;
+        lod_any |= lod_w[r] > 0.0f;
+        if (rs[r].either)
+            either |= 1u << r;
+        if (!iso->node_count || !ray_enter(iso, &rays[r], &g, &r0[r], &r1[r]))
+            continue;
+        active |= 1u << r;
+        octant = g.octant;
+        const float d[3] = {rays[r].dir.x, rays[r].dir.y, rays[r].dir.z};
+        for (int a = 0; a < 3; ++a)
+            od[a][r] = g.od[a], inv[a][r] = g.inv[a], dir[a][r] = d[a];
+    }
+    packet16_geom pg;
+    for (int a = 0; a < 3; ++a)
+        pg.od[a] = sg_v16_load(od[a]), pg.inv[a] = sg_v16_load(inv[a]), pg.dir[a] = sg_v16_load(dir[a]);
+    const sg_v16 lw = sg_v16_load(lod_w), zero = sg_v16_set1(0.0f);
+    packet16_entry st[STACK_MAX];
+    int sp = 0;
+    if (active)
+        st[sp++] = (packet16_entry){sg_v16_load(r0), sg_v16_load(r1), 0, 0, 0, 0, (uint16_t)active, 0, CELL_NODE};
+    while (sp > 0) {
+        const packet16_entry *e = &st[--sp];
+        unsigned act = e->active & ~found;
+        if (!act)
+            continue;
+        if (stats)
+            for (unsigned m = act; m; m &= m - 1)
+                nodes[__builtin_ctz(m)]++;
+        if (e->kind == CELL_POSITIVE) {
+            for (unsigned m = act; m; m &= m - 1) {
+                rs[__builtin_ctz(m)].outside = 1;
+                rs[__builtin_ctz(m)].carry = 0;
+            }
+            continue;
+        }
+        uint32_t size = 1u << (iso->max_depth - e->level);
+        if (e->kind == CELL_LEAF) {
+            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+            float t0[16], t1[16];
+            sg_v16_store(t0, e->t0);
+            sg_v16_store(t1, e->t1);
+            patch P; /* once for the rays meeting it */
+            leaf_patch(iso, e->index, &P);
+            patch_ray pr[16];
+            packet16_patch_ray(&P, box, &pg, e->t0, e->t1, act, pr);
+            for (unsigned m = act; m; m &= m - 1) {
+                int r = __builtin_ctz(m);
+                leaves[r]++;
+                if (patch_solve(iso, &P, box, t0[r], t1[r], &pr[r], &rs[r], &hits[r]))
+                    found |= 1u << r;
+            }
+            continue;
+        }
+        const iso_lod *D = &iso->nodes[e->index].lod;
+        act &= ~packet16_slab_skips(&pg, D, iso_lod_normal(D), rs, act, e->t0, e->t1);
+        if (!act)
+            continue;
+        if (lod_any && D->leaf != ISO_NO_LOD) {
+            /* lod_takes lane by lane: lod_w > 0 and size * unit <= lod_w * t0 */
+            unsigned takes = act & sg_v16_gt(lw, zero) &
+                             sg_v16_le(sg_v16_set1((float)size * iso->unit), sg_v16_mul(lw, e->t0));
+            if (takes) {
+                sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
+                float t0[16], t1[16];
+                sg_v16_store(t0, e->t0);
+                sg_v16_store(t1, e->t1);
+                for (unsigned m = takes; m; m &= m - 1) {
+                    int r = __builtin_ctz(m);
+                    if (lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
+                        found |= 1u << r;
+                }
+                act &= ~found;
+                if (!act)
+                    continue;
+            }
+        }
+        const iso_node *N = &iso->nodes[e->index];
+        uint32_t base[3] = {e->x, e->y, e->z};
+        uint8_t level = e->level;
+        sg_v16 T0 = e->t0, T1 = e->t1;
+        float p[3][3];
+        cell_planes(iso, base, size, p);
+        sg_v16 ilo[3][2], ihi[3][2];
+        packet16_half_intervals(&pg, p, ilo, ihi);
+        unsigned pos_rays = act & either; /* positive cells: see trace4 */
+        /* farthest child first; e (a stack slot) is overwritten from here on */
+        for (int j = 7; j >= 0; --j) {
+            unsigned k = (unsigned)j ^ octant;
+            unsigned exists = N->child_mask >> k & 1u, pos = N->pos_mask >> k & 1u;
+            unsigned lanes = exists ? act : pos ? pos_rays : 0u;
+            if (!lanes)
+                continue;
+            sg_v16 c0 = sg_v16_max(sg_v16_max(T0, ilo[0][k & 1]), sg_v16_max(ilo[1][k >> 1 & 1], ilo[2][k >> 2]));
+            sg_v16 c1 = sg_v16_min(sg_v16_min(T1, ihi[0][k & 1]), sg_v16_min(ihi[1][k >> 1 & 1], ihi[2][k >> 2]));
+            lanes &= sg_v16_le(c0, c1);
+            if (!lanes)
+                continue;
+            stack_entry ce = child_entry(N, base, size, level, k);
+            prefetch_cell(iso, &ce);
+            assert(sp < STACK_MAX);
+            st[sp++] = (packet16_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, (uint16_t)lanes, ce.level, ce.is_leaf};
+        }
+    }
+    for (unsigned m = mask; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (!(found >> r & 1u))
+            hits[r].splat = SG_INVALID_ID;
+        count_ray(stats, &rs[r], nodes[r], leaves[r], (int)(found >> r & 1u));
+    }
+    return found;
+}
+#endif
+
+unsigned sg_iso_intersect16(const sg_iso *iso, const sg_ray *rays, unsigned mask, sg_hit *hits, sg_ray_stats *stats)
+{
+    assert(iso && rays && hits);
+    mask &= 0xFFFFu;
+    unsigned found = 0;
+#if SG_V16_SIMD
+    /* one traversal per direction octant (front to back is the octant's
+     * order: a block on an octant's border is two or four packets) */
+    unsigned octant[16], left = 0;
+    for (unsigned m = mask; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        sg_vec3 d = rays[r].dir;
+        if (d.x == 0.0f || d.y == 0.0f || d.z == 0.0f)
+            continue; /* alone, below */
+        octant[r] = (d.x < 0.0f) | (d.y < 0.0f) << 1 | (d.z < 0.0f) << 2;
+        left |= 1u << r;
+    }
+    unsigned alone = mask & ~left;
+    while (left) {
+        unsigned o = octant[__builtin_ctz(left)], same = 0;
+        for (unsigned m = left; m; m &= m - 1)
+            if (octant[__builtin_ctz(m)] == o)
+                same |= 1u << __builtin_ctz(m);
+        found |= trace16(iso, rays, same, hits, stats);
+        left &= ~same;
+    }
+#else
+    unsigned alone = mask;
+#endif
+    for (unsigned m = alone; m; m &= m - 1) {
+        int r = __builtin_ctz(m);
+        if (trace(iso, &rays[r], &hits[r], stats))
+            found |= 1u << r;
+    }
+    return found;
+}
 
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats)

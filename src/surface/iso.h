@@ -212,6 +212,16 @@ int sg_iso_intersect(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_s
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats);
 
+/* sg_iso_intersect4 for up to sixteen rays (bit r of mask: rays[r]), e.g.
+ * a 4 x 4 block of camera rays: the rays of each direction octant go down
+ * one traversal (one read of a node's record for all of them), each with
+ * its own intervals, and get exactly their single-ray hits, bit for bit
+ * (tested); a ray with a zero direction component is traced alone. Returns
+ * the mask of the rays that hit; a ray of mask that misses gets splat =
+ * SG_INVALID_ID; entries outside mask are neither read nor written. */
+unsigned sg_iso_intersect16(const sg_iso *iso, const sg_ray *rays, unsigned mask, sg_hit *hits,
+                            sg_ray_stats *stats);
+
 /* 1 if any accepted crossing lies in [tmin, tmax] (shadow rays). */
 int sg_iso_occluded(const sg_iso *iso, const sg_ray *ray, sg_ray_stats *stats);
 

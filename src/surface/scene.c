@@ -951,6 +951,8 @@ unsigned sg_scene_intersect16(const sg_scene *sc, const sg_ray *rays, unsigned m
     if (sc->hybrid) /* one walk for the sixteen (sg_hybrid_intersect16) */
         return sg_hybrid_scene_intersect16(sc->hybrid, &sc->hybrid_sites, sc->desc.hybrid_lod, rays, mask, hits,
                                            stats);
+    if (sc->iso) /* one traversal per direction octant (sg_iso_intersect16) */
+        return sg_iso_intersect16(sc->iso, rays, mask, hits, stats);
     /* The others in quads: each ray gets its own hit whatever the grouping. */
     unsigned found = 0;
     for (int q = 0; q < 16; q += 4)

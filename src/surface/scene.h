@@ -156,7 +156,8 @@ unsigned sg_scene_intersect4(const sg_scene *scene, const sg_ray rays[4], unsign
 
 /* sg_scene_intersect4 for up to sixteen rays (bits 0-15 of mask), e.g. a
  * 4 x 4 block of camera rays: the same hits, bit for bit. The hybrid
- * traces them in one walk (sg_hybrid_intersect16); the others as four
+ * traces them in one walk (sg_hybrid_intersect16), the ISO in one
+ * traversal per direction octant (sg_iso_intersect16); the others as four
  * quads (sg_scene_intersect4). Only the entries of rays and hits whose
  * bit is set are read or written. */
 unsigned sg_scene_intersect16(const sg_scene *scene, const sg_ray *rays, unsigned mask, sg_hit *hits,

@@ -718,6 +718,152 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
     sg_world_destroy(w);
 }
 
+/* Checks sixteen rays' packet hits (got, hits[]) against each ray alone:
+ * the same hit or miss, the same t, p, n, splat and leaf, bit for bit;
+ * entries outside mask untouched (they were set to 0x5A bytes). Returns
+ * the mask of rays that hit alone; counts into *checked and *hits. */
+static unsigned check16(const sg_iso *iso, const sg_ray rays[16], unsigned mask, unsigned got, const sg_hit hits[16],
+                        const char *where, int *checked, int *nhits)
+{
+    unsigned alone = 0;
+    for (int r = 0; r < 16; ++r) {
+        if (!(mask >> r & 1u)) {
+            sg_hit untouched;
+            memset(&untouched, 0x5A, sizeof untouched);
+            if (memcmp(&hits[r], &untouched, sizeof untouched) != 0)
+                fail_msg("%s ray %d outside the mask was written", where, r);
+            continue;
+        }
+        sg_hit one;
+        int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
+        alone |= (unsigned)h << r;
+        ++*checked;
+        *nhits += h;
+        if (h != (int)(got >> r & 1u))
+            fail_msg("%s ray %d (dir %.9g %.9g %.9g): alone %d, in sixteen %u", where, r, (double)rays[r].dir.x,
+                     (double)rays[r].dir.y, (double)rays[r].dir.z, h, got >> r & 1u);
+        if (h && (memcmp(&one.t, &hits[r].t, sizeof one.t) || memcmp(&one.p, &hits[r].p, sizeof one.p) ||
+                  memcmp(&one.n, &hits[r].n, sizeof one.n) || one.splat != hits[r].splat || one.leaf != hits[r].leaf))
+            fail_msg("%s ray %d: hits differ (t %.9g vs %.9g, leaf %u vs %u, n %.9g %.9g %.9g vs %.9g %.9g %.9g)",
+                     where, r, (double)one.t, (double)hits[r].t, one.leaf, hits[r].leaf, (double)one.n.x,
+                     (double)one.n.y, (double)one.n.z, (double)hits[r].n.x, (double)hits[r].n.y, (double)hits[r].n.z);
+        if (!h && hits[r].splat != SG_INVALID_ID)
+            fail_msg("%s ray %d: a miss in sixteen does not say so", where, r);
+    }
+    return alone;
+}
+
+/* Sixteen rays at once (4 x 4 blocks, row-major as the viewer's) get the
+ * hits each gets alone, bit for bit, on the sphere: from outside and
+ * inside (either face, front only, back only), blocks on the silhouette,
+ * blocks with rays of other direction signs (several traversals), a ray
+ * with a zero direction component (traced alone), and masks with rays
+ * left out. */
+static void intersect16_matches_single(float lod_px)
+{
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_set_lod(iso, lod_px);
+    float spread = lod_px > 0.0f ? 2.0f * tanf(20.0f * PI / 180.0f) / 64.0f : 0.0f;
+    const sg_vec3 eyes[3] = {sg_v3(1.5f, 1.0f, 3.0f), sg_v3(0.1f, -0.2f, 0.05f), sg_v3(-2.5f, 0.3f, -1.0f)};
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const unsigned masks[3] = {0xFFFFu, 0x0777u, 0xA5C3u};
+    const int n = 64;
+    int checked = 0, hits = 0;
+    char where[96];
+    for (int ei = 0; ei < 3; ++ei)
+        for (int fi = 0; fi < 3; ++fi)
+            for (int y = 0; y < n; y += 4)
+                for (int x = 0; x < n; x += 4) {
+                    sg_ray rays[16];
+                    for (int r = 0; r < 16; ++r) {
+                        rays[r] = camera_ray(eyes[ei], sg_v3(0, 0, 0), n, x + (r & 3), y + (r >> 2));
+                        rays[r].flags = flags[fi];
+                        rays[r].spread = spread;
+                    }
+                    int b = x / 4 + y;
+                    if (b % 7 == 0) /* rays of other direction signs */
+                        rays[5].dir = sg_v3_scale(rays[5].dir, -1.0f), rays[14].dir.y = -rays[14].dir.y;
+                    if (b % 11 == 0) /* parallel to the x planes */
+                        rays[9].dir = sg_v3_normalize(sg_v3(0.0f, rays[9].dir.y, rays[9].dir.z));
+                    unsigned mask = masks[b % 3];
+                    sg_hit sixteen[16];
+                    memset(sixteen, 0x5A, sizeof sixteen);
+                    unsigned got = sg_iso_intersect16(iso, rays, mask, sixteen, NULL);
+                    snprintf(where, sizeof where, "eye %d flags %u block (%d, %d)", ei, flags[fi], x, y);
+                    check16(iso, rays, mask, got, sixteen, where, &checked, &hits);
+                }
+    printf("intersect16 (lod %g px): %d rays checked, %d hits\n", (double)lod_px, checked, hits);
+    assert_true(hits > checked / 4);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
+static void test_iso_intersect16_matches_single(void **state)
+{
+    (void)state;
+    intersect16_matches_single(0.0f);
+}
+
+/* The same with level of detail (see test_iso_intersect4_matches_single_lod). */
+static void test_iso_intersect16_matches_single_lod(void **state)
+{
+    (void)state;
+    intersect16_matches_single(8.0f);
+}
+
+/* Sixteen rays at once against one at a time on the bunny's ISO from 400
+ * random cameras, outside and inside its box, level of detail 0 and 1
+ * pixel, every face flag: 4 x 4 blocks of neighbouring pixels and blocks
+ * whose rays lie up to 16 pixels apart (lanes leave the shared traversal
+ * at different cells), misses and silhouettes, full and partial masks. */
+static void test_iso_intersect16_matches_single_bunny(void **state)
+{
+    (void)state;
+    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"bunny\",\"points\":30000}]}");
+    sg_iso *iso = build_iso(sg_scene_points(sg_world_scene(w, 0)), 0);
+    sg_iso_info info;
+    sg_iso_get_info(iso, &info);
+    sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
+    float R = 0.5f * sg_v3_length(sg_v3_sub(info.bounds.hi, info.bounds.lo));
+    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const int n = 64;
+    uint64_t rng = 13;
+    int checked = 0, hits = 0, diverged = 0;
+    char where[128];
+    for (int cam = 0; cam < 400; ++cam) {
+        float lod_px = cam % 2 ? 1.0f : 0.0f;
+        sg_iso_set_lod(iso, lod_px);
+        sg_vec3 eye = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
+        sg_vec3 look = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
+        uint32_t fl = flags[cam % 3];
+        int step = cam % 4 == 3 ? 1 + (int)(5.0f * sg_test_rand01(&rng)) : 1;
+        for (int q = 0; q < 8; ++q) {
+            int x = (int)((float)(n - 3 * step) * sg_test_rand01(&rng));
+            int y = (int)((float)(n - 3 * step) * sg_test_rand01(&rng));
+            sg_ray rays[16];
+            for (int r = 0; r < 16; ++r) {
+                rays[r] = camera_ray(eye, look, n, x + (r & 3) * step, y + (r >> 2) * step);
+                rays[r].flags = fl;
+                rays[r].spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)n;
+            }
+            unsigned mask = q % 5 == 4 ? (unsigned)(sg_test_rand01(&rng) * 65536.0f) & 0xFFFFu : 0xFFFFu;
+            sg_hit sixteen[16];
+            memset(sixteen, 0x5A, sizeof sixteen);
+            unsigned got = sg_iso_intersect16(iso, rays, mask, sixteen, NULL);
+            snprintf(where, sizeof where, "camera %d (eye %g %g %g) block (%d, %d) step %d", cam, (double)eye.x,
+                     (double)eye.y, (double)eye.z, x, y, step);
+            unsigned alone = check16(iso, rays, mask, got, sixteen, where, &checked, &hits);
+            diverged += alone != 0 && alone != mask;
+        }
+    }
+    printf("intersect16 on the bunny: %d rays checked, %d hits, %d blocks partly hit\n", checked, hits, diverged);
+    assert_true(hits > checked / 5 && hits < checked * 9 / 10 && diverged > 100);
+    sg_iso_destroy(iso);
+    sg_world_destroy(w);
+}
+
 /* 8b. Level of detail (iso.h) against full detail on a sampled sphere seen
  * small (radius 1 at distance 6: about 62 of 128 pixels across), so that
  * cells below a few footprints hold much of the surface.
@@ -1137,6 +1283,9 @@ int main(void)
         cmocka_unit_test(test_iso_intersect4_matches_single),
         cmocka_unit_test(test_iso_intersect4_matches_single_lod),
         cmocka_unit_test(test_iso_intersect4_matches_single_bunny),
+        cmocka_unit_test(test_iso_intersect16_matches_single),
+        cmocka_unit_test(test_iso_intersect16_matches_single_lod),
+        cmocka_unit_test(test_iso_intersect16_matches_single_bunny),
         cmocka_unit_test(test_iso_lod_against_full_detail),
         cmocka_unit_test(test_iso_sphere_no_holes),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
