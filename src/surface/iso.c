@@ -430,8 +430,8 @@ typedef struct patch_ray {
 } patch_ray;
 
 /* The ray's patch_ray for patch P (box b, coefficients set) over [t0, t1];
- * trace4 evaluates the same expressions in the same order for its lanes
- * (packet_patch_ray). */
+ * trace16 evaluates the same expressions in the same order for its lanes
+ * (packet16_patch_ray). */
 static inline void patch_ray_of(const patch *P, sg_aabb b, const sg_ray *ray, float t0, float t1, patch_ray *pr)
 {
     const float *v = P->v;
@@ -846,287 +846,23 @@ out:
     return found;
 }
 
-/* Four rays with the same direction signs down one traversal: each keeps
- * its own interval per cell (computed as trace computes it) and its own
- * state, so it meets the same leaves in the same order with the same
- * intervals as alone and gets the same hit, bit for bit; a cell is
- * visited while any ray still looking for a hit crosses it. */
-#ifdef __AVX2__
-/* The rays are the four lanes of SSE vectors. Every interval is the
- * single-ray expression lane by lane: half_intervals' min2(a, b) is
- * _mm_min_ps(b, a) and max2(a, b) is _mm_max_ps(b, a) (both return their
- * second operand unless the first is strictly smaller / larger), and the
- * children's clipping is children_crossed's AVX expression with the
- * operands in its order. */
-typedef struct packet_entry {
-    __m128 t0, t1;
-    uint32_t index, x, y, z;
-    uint8_t level, kind, active; /* kind: CELL_*; active: rays crossing it */
-} packet_entry;
-
-/* The per-axis constants of four rays, lane r = rays[r]. */
-typedef struct packet_geom {
-    __m128 od[3], inv[3];
-    __m128 dir[3];  /* the directions, for the slab test               */
-    __m128 par[3];  /* all ones where ray r is parallel to axis a's planes */
-    int any_par[3];
-} packet_geom;
-
-/* The lanes of act whose path through the cell ([t0, t1]) stays off node
- * D's slab (normal n): slab_skips' test lane by lane, each expression in
- * its order (no contraction: mul then add), min2/max2 as above. The
- * decision that follows is slab_off_skips, per lane. */
-static inline unsigned packet_slab_skips(const packet_geom *pg, const iso_lod *D, sg_vec3 n, ray_state rs[4],
-                                         unsigned act, __m128 t0, __m128 t1)
-{
-    const __m128 nx = _mm_set1_ps(n.x), ny = _mm_set1_ps(n.y), nz = _mm_set1_ps(n.z);
-    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
-    __m128 px = _mm_mul_ps(nx, pg->od[0]), py = _mm_mul_ps(ny, pg->od[1]), pz = _mm_mul_ps(nz, pg->od[2]);
-    __m128 s0 = _mm_add_ps(_mm_add_ps(px, py), pz);
-    __m128 sd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, pg->dir[0]), _mm_mul_ps(ny, pg->dir[1])),
-                           _mm_mul_ps(nz, pg->dir[2]));
-    __m128 a = _mm_add_ps(s0, _mm_mul_ps(sd, t0)), b = _mm_add_ps(s0, _mm_mul_ps(sd, t1));
-    __m128 sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_and_ps(px, absmask), _mm_and_ps(py, absmask)),
-                                       _mm_and_ps(pz, absmask)),
-                            t1);
-    __m128 m = _mm_mul_ps(_mm_set1_ps(8.0f * FLT_EPSILON), sum);
-    __m128 above = _mm_cmpgt_ps(_mm_min_ps(b, a), _mm_add_ps(_mm_set1_ps(D->s_hi), m));
-    __m128 below = _mm_cmplt_ps(_mm_max_ps(b, a), _mm_sub_ps(_mm_set1_ps(D->s_lo), m));
-    unsigned up = (unsigned)_mm_movemask_ps(above), off = (up | (unsigned)_mm_movemask_ps(below)) & act;
-    unsigned skip = 0;
-    for (unsigned q = off; q; q &= q - 1) {
-        int r = __builtin_ctz(q);
-        if (slab_off_skips(D, &rs[r], (int)(up >> r & 1u)))
-            skip |= 1u << r;
-    }
-    return skip;
-}
-
-/* half_intervals for the four lanes at once. */
-static inline void packet_half_intervals(const packet_geom *pg, const float p[3][3], __m128 ilo[3][2], __m128 ihi[3][2])
-{
-    const __m128 pinf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
-    for (int a = 0; a < 3; ++a) {
-        __m128 o = pg->od[a], inv = pg->inv[a];
-        __m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][0]), o), inv);
-        __m128 pm = _mm_set1_ps(p[a][1]);
-        __m128 tm = _mm_mul_ps(_mm_sub_ps(pm, o), inv);
-        __m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(p[a][2]), o), inv);
-        ilo[a][0] = _mm_min_ps(tm, ta);
-        ihi[a][0] = _mm_max_ps(tm, ta);
-        ilo[a][1] = _mm_min_ps(tb, tm);
-        ihi[a][1] = _mm_max_ps(tb, tm);
-        if (pg->any_par[a]) {
-            __m128 below = _mm_cmple_ps(o, pm), above = _mm_cmpge_ps(o, pm), par = pg->par[a];
-            ilo[a][0] = _mm_blendv_ps(ilo[a][0], _mm_blendv_ps(pinf, ninf, below), par);
-            ihi[a][0] = _mm_blendv_ps(ihi[a][0], _mm_blendv_ps(ninf, pinf, below), par);
-            ilo[a][1] = _mm_blendv_ps(ilo[a][1], _mm_blendv_ps(pinf, ninf, above), par);
-            ihi[a][1] = _mm_blendv_ps(ihi[a][1], _mm_blendv_ps(ninf, pinf, above), par);
-        }
-    }
-}
-
-/* Short names for the cubic's long sums below (no contraction). */
-static inline __m128 vmul(__m128 a, __m128 b) { return _mm_mul_ps(a, b); }
-static inline __m128 vadd(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
-
-/* patch_ray_of for the four lanes at once (lane r: ray r over
- * [T0[r], T1[r]]), each expression in its order: one division per
- * quantity for all lanes instead of one per lane. */
-static inline void packet_patch_ray(const patch *P, sg_aabb b, const packet_geom *pg, __m128 T0, __m128 T1,
-                                    patch_ray pr[4])
-{
-    const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
-    __m128 S = _mm_sub_ps(T1, T0), loc[3], rate[3];
-    for (int a = 0; a < 3; ++a) {
-        __m128 h = _mm_set1_ps(hi[a] - lo[a]);
-        __m128 e = _mm_add_ps(pg->od[a], _mm_mul_ps(pg->dir[a], T0));
-        loc[a] = _mm_div_ps(_mm_sub_ps(e, _mm_set1_ps(lo[a])), h);
-        rate[a] = _mm_div_ps(_mm_mul_ps(pg->dir[a], S), h);
-    }
-    __m128 u = loc[0], w = loc[1], z = loc[2], bu = rate[0], bw = rate[1], bz = rate[2];
-    __m128 k1 = _mm_set1_ps(P->k[1]), k2 = _mm_set1_ps(P->k[2]), k3 = _mm_set1_ps(P->k[3]), k4 = _mm_set1_ps(P->k[4]);
-    __m128 k5 = _mm_set1_ps(P->k[5]), k6 = _mm_set1_ps(P->k[6]), k7 = _mm_set1_ps(P->k[7]);
-    __m128 a0 = vadd(vadd(vadd(vadd(vadd(vadd(vadd(_mm_set1_ps(P->v[0]), vmul(k1, u)), vmul(k2, w)), vmul(k3, z)), vmul(vmul(k4, u), w)), vmul(vmul(k5, w), z)),
-                    vmul(vmul(k6, u), z)),
-                  vmul(vmul(vmul(k7, u), w), z));
-    __m128 a1 = vadd(vadd(vadd(vadd(vadd(vadd(vmul(k1, bu), vmul(k2, bw)), vmul(k3, bz)), vmul(k4, vadd(vmul(u, bw), vmul(w, bu)))), vmul(k5, vadd(vmul(w, bz), vmul(z, bw)))),
-                    vmul(k6, vadd(vmul(u, bz), vmul(z, bu)))),
-                  vmul(k7, vadd(vadd(vmul(vmul(bu, w), z), vmul(vmul(u, bw), z)), vmul(vmul(u, w), bz))));
-    __m128 a2 = vadd(vadd(vadd(vmul(vmul(k4, bu), bw), vmul(vmul(k5, bw), bz)), vmul(vmul(k6, bu), bz)),
-                  vmul(k7, vadd(vadd(vmul(vmul(bu, bw), z), vmul(vmul(bu, w), bz)), vmul(vmul(u, bw), bz))));
-    __m128 a3 = vmul(vmul(vmul(k7, bu), bw), bz);
-    float f[10][4];
-    _mm_storeu_ps(f[0], u), _mm_storeu_ps(f[1], w), _mm_storeu_ps(f[2], z);
-    _mm_storeu_ps(f[3], bu), _mm_storeu_ps(f[4], bw), _mm_storeu_ps(f[5], bz);
-    _mm_storeu_ps(f[6], a0), _mm_storeu_ps(f[7], a1), _mm_storeu_ps(f[8], a2), _mm_storeu_ps(f[9], a3);
-    for (int r = 0; r < 4; ++r)
-        pr[r] = (patch_ray){f[0][r], f[1][r], f[2][r], f[3][r], f[4][r], f[5][r], {f[6][r], f[7][r], f[8][r], f[9][r]}};
-}
-
-static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
-{
-    ray_state rs[4];
-    ray_geom g[4];
-    float r0[4] = {0}, r1[4] = {0};
-    unsigned active = 0, found = 0, either = 0;
-    uint64_t nodes[4] = {0}, leaves[4] = {0};
-    float lod_w[4] = {0};
-    int lod_any = 0;
-    for (int r = 0; r < 4; ++r) {
-        if (!(mask >> r & 1u))
-            continue;
-        ray_state_init(&rs[r], &rays[r]);
-        lod_w[r] = iso->lod_px * rays[r].spread;
-        lod_any |= lod_w[r] > 0.0f;
-        if (rs[r].either)
-            either |= 1u << r;
-        if (iso->node_count && ray_enter(iso, &rays[r], &g[r], &r0[r], &r1[r]))
-            active |= 1u << r;
-    }
-    packet_geom pg;
-    for (int a = 0; a < 3; ++a) {
-        float od[4] = {0}, inv[4] = {0}, par[4] = {0}, dir[4] = {0};
-        for (int r = 0; r < 4; ++r) {
-            if (!(active >> r & 1u))
-                continue;
-            od[r] = g[r].od[a];
-            inv[r] = g[r].inv[a];
-            dir[r] = a == 0 ? rays[r].dir.x : a == 1 ? rays[r].dir.y : rays[r].dir.z;
-            par[r] = g[r].par[a] ? -1.0f : 0.0f; /* the sign bit is blendv's mask */
-        }
-        pg.od[a] = _mm_loadu_ps(od);
-        pg.inv[a] = _mm_loadu_ps(inv);
-        pg.dir[a] = _mm_loadu_ps(dir);
-        pg.par[a] = _mm_loadu_ps(par);
-        pg.any_par[a] = _mm_movemask_ps(pg.par[a]) != 0;
-    }
-    unsigned octant = active ? g[__builtin_ctz(active)].octant : 0u;
-    packet_entry st[STACK_MAX];
-    int sp = 0;
-    if (active)
-        st[sp++] = (packet_entry){_mm_loadu_ps(r0), _mm_loadu_ps(r1), 0, 0, 0, 0, 0, CELL_NODE, (uint8_t)active};
-    while (sp > 0) {
-        const packet_entry *e = &st[--sp];
-        unsigned act = e->active & ~found;
-        if (!act)
-            continue;
-        if (stats)
-            for (unsigned m = act; m; m &= m - 1)
-                nodes[__builtin_ctz(m)]++;
-        if (e->kind == CELL_POSITIVE) {
-            for (unsigned m = act; m; m &= m - 1) {
-                rs[__builtin_ctz(m)].outside = 1;
-                rs[__builtin_ctz(m)].carry = 0;
-            }
-            continue;
-        }
-        uint32_t size = 1u << (iso->max_depth - e->level);
-        if (e->kind == CELL_LEAF) {
-            sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
-            float t0[4], t1[4];
-            _mm_storeu_ps(t0, e->t0);
-            _mm_storeu_ps(t1, e->t1);
-            patch P; /* once for the rays meeting it */
-            leaf_patch(iso, e->index, &P);
-            patch_ray pr[4];
-            packet_patch_ray(&P, box, &pg, e->t0, e->t1, pr);
-            for (unsigned m = act; m; m &= m - 1) {
-                int r = __builtin_ctz(m);
-                leaves[r]++;
-                if (patch_solve(iso, &P, box, t0[r], t1[r], &pr[r], &rs[r], &hits[r]))
-                    found |= 1u << r;
-            }
-            continue;
-        }
-        const iso_lod *D = &iso->nodes[e->index].lod;
-        act &= ~packet_slab_skips(&pg, D, iso_lod_normal(D), rs, act, e->t0, e->t1);
-        if (!act)
-            continue;
-        if (lod_any && D->leaf != ISO_NO_LOD) {
-            /* lod_takes lane by lane: lod_w > 0 and size * unit <= lod_w * t0 */
-            __m128 lw = _mm_loadu_ps(lod_w);
-            __m128 take = _mm_and_ps(_mm_cmpgt_ps(lw, _mm_setzero_ps()),
-                                     _mm_cmple_ps(_mm_set1_ps((float)size * iso->unit), _mm_mul_ps(lw, e->t0)));
-            unsigned takes = act & (unsigned)_mm_movemask_ps(take);
-            if (takes) {
-                sg_aabb box = cell_box(iso, e->x, e->y, e->z, size);
-                float t0[4], t1[4];
-                _mm_storeu_ps(t0, e->t0);
-                _mm_storeu_ps(t1, e->t1);
-                for (unsigned m = takes; m; m &= m - 1) {
-                    int r = __builtin_ctz(m);
-                    if (lod_hit(iso, e->index, box, t0[r], t1[r], &rs[r], &hits[r]))
-                        found |= 1u << r;
-                }
-                act &= ~found;
-                if (!act)
-                    continue;
-            }
-        }
-        const iso_node *N = &iso->nodes[e->index];
-        uint32_t base[3] = {e->x, e->y, e->z};
-        uint8_t level = e->level;
-        __m128 T0 = e->t0, T1 = e->t1;
-        float p[3][3];
-        cell_planes(iso, base, size, p);
-        __m128 ilo[3][2], ihi[3][2];
-        packet_half_intervals(&pg, p, ilo, ihi);
-        /* positive cells matter only to rays accepting either face */
-        unsigned pos_rays = act & either;
-        /* children front to back is j = 0..7 with k = j ^ octant: push the
-         * farthest first; e (a stack slot) is overwritten from here on */
-        for (int j = 7; j >= 0; --j) {
-            unsigned k = (unsigned)j ^ octant;
-            unsigned exists = N->child_mask >> k & 1u, pos = N->pos_mask >> k & 1u;
-            unsigned lanes = exists ? act : pos ? pos_rays : 0u;
-            if (!lanes)
-                continue;
-            __m128 c0 = _mm_max_ps(_mm_max_ps(T0, ilo[0][k & 1]), _mm_max_ps(ilo[1][k >> 1 & 1], ilo[2][k >> 2]));
-            __m128 c1 = _mm_min_ps(_mm_min_ps(T1, ihi[0][k & 1]), _mm_min_ps(ihi[1][k >> 1 & 1], ihi[2][k >> 2]));
-            lanes &= (unsigned)_mm_movemask_ps(_mm_cmple_ps(c0, c1));
-            if (!lanes)
-                continue;
-            stack_entry ce = child_entry(N, base, size, level, k);
-            prefetch_cell(iso, &ce);
-            assert(sp < STACK_MAX);
-            st[sp++] = (packet_entry){c0, c1, ce.index, ce.x, ce.y, ce.z, ce.level, ce.is_leaf, (uint8_t)lanes};
-        }
-    }
-    for (int r = 0; r < 4; ++r) {
-        if (!(mask >> r & 1u))
-            continue;
-        if (!(found >> r & 1u))
-            hits[r].splat = SG_INVALID_ID;
-        count_ray(stats, &rs[r], nodes[r], leaves[r], (int)(found >> r & 1u));
-    }
-    return found;
-}
-#else
-/* The portable build traces each ray alone (the same hits). */
-static unsigned trace4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4], sg_ray_stats *stats)
-{
-    unsigned found = 0;
-    for (unsigned m = mask; m; m &= m - 1) {
-        int r = __builtin_ctz(m);
-        if (trace(iso, &rays[r], &hits[r], stats))
-            found |= 1u << r;
-    }
-    return found;
-}
-#endif
-
 /* ---- packets of sixteen ------------------------------------------------------ */
 
-/* trace4 made sixteen lanes wide (a 4 x 4 block of camera rays): one
- * node's record, fetched once, serves every ray of the block still
- * crossing it, where quads fetched it once per quad (the records are cache
- * misses: docs/iso.md, "Where it falls short"). Each lane computes trace4's
- * expressions in its order with the sg_v16 operations (math/v16.h: the
- * scalar rounding, min/max as _mm_min_ps/_mm_max_ps), so each ray gets its
- * single-ray hit bit for bit. Rays parallel to an axis's planes are left
- * to the single-ray path (their half intervals need a per-lane select;
- * camera rays almost never have a zero component). */
+/* Up to sixteen rays with the same direction signs (a 4 x 4 block of
+ * camera rays) down one traversal: each keeps its own interval per cell
+ * and its own state, so it meets the same leaves in the same order with
+ * the same intervals as alone and gets the same hit, bit for bit; a cell
+ * is visited while any ray still looking for a hit crosses it. One node's
+ * record, fetched once, serves every such ray (the records are cache
+ * misses: docs/iso.md, "Where it falls short"). Every interval is the
+ * single-ray expression lane by lane with the sg_v16 operations (math/v16.h:
+ * the scalar rounding); half_intervals' min2(a, b) is sg_v16_min(b, a) and
+ * max2(a, b) sg_v16_max(b, a) (both return their second operand unless the
+ * first is strictly smaller / larger), and the children's clipping is
+ * children_crossed's expression with the operands in its order. Rays
+ * parallel to an axis's planes are left to the single-ray path (their half
+ * intervals need a per-lane select; camera rays almost never have a zero
+ * component). */
 #if SG_V16_SIMD
 typedef struct packet16_entry {
     sg_v16 t0, t1;
@@ -1180,12 +916,12 @@ static inline void packet16_half_intervals(const packet16_geom *pg, const float 
     }
 }
 
-/* packet_patch_ray for sixteen lanes; pr[r] is written for the lanes of
- * act only. */
 /* Short names for the cubic's long sums below (no contraction). */
 static inline sg_v16 wmul(sg_v16 a, sg_v16 b) { return sg_v16_mul(a, b); }
 static inline sg_v16 wadd(sg_v16 a, sg_v16 b) { return sg_v16_add(a, b); }
 
+/* patch_ray_of for sixteen lanes; pr[r] is written for the lanes of act
+ * only. */
 static inline void packet16_patch_ray(const patch *P, sg_aabb b, const packet16_geom *pg, sg_v16 T0, sg_v16 T1,
                                       unsigned act, patch_ray pr[16])
 {
@@ -1318,7 +1054,7 @@ static unsigned trace16(const sg_iso *iso, const sg_ray *rays, unsigned mask, sg
         cell_planes(iso, base, size, p);
         sg_v16 ilo[3][2], ihi[3][2];
         packet16_half_intervals(&pg, p, ilo, ihi);
-        unsigned pos_rays = act & either; /* positive cells: see trace4 */
+        unsigned pos_rays = act & either; /* positive cells matter only to rays accepting either face */
         /* farthest child first; e (a stack slot) is overwritten from here on */
         for (int j = 7; j >= 0; --j) {
             unsigned k = (unsigned)j ^ octant;
@@ -1387,30 +1123,7 @@ unsigned sg_iso_intersect16(const sg_iso *iso, const sg_ray *rays, unsigned mask
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats)
 {
-    assert(iso && rays && hits);
-    mask &= 15u;
-    /* one traversal for the rays that share the first ray's direction
-     * signs (front-to-back order is the octant's), the others alone */
-    unsigned same = 0, octant = 0;
-    int first = -1;
-    for (int r = 0; r < 4; ++r) {
-        if (!(mask >> r & 1u))
-            continue;
-        unsigned o = (rays[r].dir.x < 0.0f) | (rays[r].dir.y < 0.0f) << 1 | (rays[r].dir.z < 0.0f) << 2;
-        if (first < 0) {
-            first = r;
-            octant = o;
-        }
-        if (o == octant)
-            same |= 1u << r;
-    }
-    unsigned found = same ? trace4(iso, rays, same, hits, stats) : 0u;
-    for (unsigned m = mask & ~same; m; m &= m - 1) {
-        int r = __builtin_ctz(m);
-        if (trace(iso, &rays[r], &hits[r], stats))
-            found |= 1u << r;
-    }
-    return found;
+    return sg_iso_intersect16(iso, rays, mask & 15u, hits, stats); /* a quad is a packet of four */
 }
 
 int sg_iso_intersect(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_stats *stats)

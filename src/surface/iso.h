@@ -204,11 +204,11 @@ int sg_iso_intersect(const sg_iso *iso, const sg_ray *ray, sg_hit *hit, sg_ray_s
 
 /* Up to four rays at once (bit r of mask: rays[r]), e.g. a 2 x 2 quad of
  * camera rays: each gets exactly the hit sg_iso_intersect gives it, bit
- * for bit (tested). Rays sharing the first one's direction signs go down
- * one traversal, each with its own intervals; the others are traced
- * alone. Returns the mask of the rays that hit; a ray of mask that misses
- * gets splat = SG_INVALID_ID; hits[r] outside mask is left alone. stats
- * counts per ray. */
+ * for bit (tested). It is sg_iso_intersect16 on four rays: the rays of
+ * each direction octant go down one traversal, each with its own
+ * intervals. Returns the mask of the rays that hit; a ray of mask that
+ * misses gets splat = SG_INVALID_ID; hits[r] outside mask is left alone.
+ * stats counts per ray. */
 unsigned sg_iso_intersect4(const sg_iso *iso, const sg_ray rays[4], unsigned mask, sg_hit hits[4],
                            sg_ray_stats *stats);
 
