@@ -563,6 +563,41 @@ static void test_iso_face_flags(void **state)
     sg_pointset_free(&ps);
 }
 
+/* Checks a packet's hits (n rays; got, hits[]) against each ray alone:
+ * the same hit or miss, the same t, p, n, splat and leaf, bit for bit;
+ * entries outside mask untouched (they were set to 0x5A bytes). Returns
+ * the mask of rays that hit alone; counts into *checked and *hits. */
+static unsigned check_packet(const sg_iso *iso, int n, const sg_ray *rays, unsigned mask, unsigned got,
+                             const sg_hit *hits, const char *where, int *checked, int *nhits)
+{
+    unsigned alone = 0;
+    for (int r = 0; r < n; ++r) {
+        if (!(mask >> r & 1u)) {
+            sg_hit untouched;
+            memset(&untouched, 0x5A, sizeof untouched);
+            if (memcmp(&hits[r], &untouched, sizeof untouched) != 0)
+                fail_msg("%s ray %d outside the mask was written", where, r);
+            continue;
+        }
+        sg_hit one;
+        int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
+        alone |= (unsigned)h << r;
+        ++*checked;
+        *nhits += h;
+        if (h != (int)(got >> r & 1u))
+            fail_msg("%s ray %d (dir %.9g %.9g %.9g): alone %d, in the packet %u", where, r, (double)rays[r].dir.x,
+                     (double)rays[r].dir.y, (double)rays[r].dir.z, h, got >> r & 1u);
+        if (h && (memcmp(&one.t, &hits[r].t, sizeof one.t) || memcmp(&one.p, &hits[r].p, sizeof one.p) ||
+                  memcmp(&one.n, &hits[r].n, sizeof one.n) || one.splat != hits[r].splat || one.leaf != hits[r].leaf))
+            fail_msg("%s ray %d: hits differ (t %.9g vs %.9g, leaf %u vs %u, n %.9g %.9g %.9g vs %.9g %.9g %.9g)",
+                     where, r, (double)one.t, (double)hits[r].t, one.leaf, hits[r].leaf, (double)one.n.x,
+                     (double)one.n.y, (double)one.n.z, (double)hits[r].n.x, (double)hits[r].n.y, (double)hits[r].n.z);
+        if (!h && hits[r].splat != SG_INVALID_ID)
+            fail_msg("%s ray %d: a miss in the packet does not say so", where, r);
+    }
+    return alone;
+}
+
 /* Four rays at once get the hits each gets alone, bit for bit: 2 x 2
  * camera quads from outside and from inside the sphere (either face,
  * front only, back only), quads that straddle the silhouette, a quad with
@@ -580,6 +615,7 @@ static void intersect4_matches_single(float lod_px)
     const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
     const int n = 64;
     int checked = 0, hits = 0;
+    char where[96];
     for (int ei = 0; ei < 3; ++ei)
         for (int fi = 0; fi < 3; ++fi)
             for (int y = 0; y < n; y += 2)
@@ -593,31 +629,11 @@ static void intersect4_matches_single(float lod_px)
                     if (((x + y) / 2) % 7 == 0) /* one ray of other direction signs */
                         rays[3].dir = sg_v3_scale(rays[3].dir, -1.0f);
                     unsigned mask = ((x / 2 + y) % 5 == 0) ? 0xBu : 0xFu;
-                    sg_hit four[4], one;
+                    sg_hit four[4];
                     memset(four, 0x5A, sizeof four);
                     unsigned got = sg_iso_intersect4(iso, rays, mask, four, NULL);
-                    for (int r = 0; r < 4; ++r) {
-                        if (!(mask >> r & 1u)) {
-                            sg_hit untouched;
-                            memset(&untouched, 0x5A, sizeof untouched);
-                            if (memcmp(&four[r], &untouched, sizeof untouched) != 0)
-                                fail_msg("ray %d outside the mask was written", r);
-                            continue;
-                        }
-                        int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
-                        ++checked;
-                        hits += h;
-                        if (h != (int)(got >> r & 1u))
-                            fail_msg("eye %d flags %u pixel (%d, %d) ray %d: alone %d, in four %u", ei, flags[fi],
-                                     x, y, r, h, got >> r & 1u);
-                        if (h && (memcmp(&one.t, &four[r].t, sizeof one.t) || memcmp(&one.p, &four[r].p, sizeof one.p) ||
-                                  memcmp(&one.n, &four[r].n, sizeof one.n) || one.splat != four[r].splat ||
-                                  one.leaf != four[r].leaf))
-                            fail_msg("eye %d flags %u pixel (%d, %d) ray %d: hits differ (t %.9g vs %.9g)", ei,
-                                     flags[fi], x, y, r, (double)one.t, (double)four[r].t);
-                        if (!h && four[r].splat != SG_INVALID_ID)
-                            fail_msg("a miss in four does not say so");
-                    }
+                    snprintf(where, sizeof where, "eye %d flags %u pixel (%d, %d)", ei, flags[fi], x, y);
+                    check_packet(iso, 4, rays, mask, got, four, where, &checked, &hits);
                 }
     printf("intersect4 (lod %g px): %d rays checked, %d hits\n", (double)lod_px, checked, hits);
     assert_true(hits > checked / 4);
@@ -662,6 +678,7 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
     const int n = 64;
     uint64_t rng = 11;
     int checked = 0, hits = 0, diverged = 0;
+    char where[128];
     for (int cam = 0; cam < 400; ++cam) {
         float lod_px = cam % 2 ? 1.0f : 0.0f;
         sg_iso_set_lod(iso, lod_px);
@@ -678,36 +695,25 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
                 rays[r].spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)n;
             }
             unsigned mask = q % 5 == 4 ? 0xDu : 0xFu;
-            sg_hit four[4], one;
+            sg_hit four[4];
+            memset(four, 0x5A, sizeof four);
             unsigned got = sg_iso_intersect4(iso, rays, mask, four, NULL);
-            unsigned alone = 0;
+            snprintf(where, sizeof where, "camera %d (eye %g %g %g) pixel (%d, %d) step %d", cam, (double)eye.x,
+                     (double)eye.y, (double)eye.z, x, y, step);
+            unsigned alone = check_packet(iso, 4, rays, mask, got, four, where, &checked, &hits);
             for (int r = 0; r < 4; ++r) {
-                if (!(mask >> r & 1u))
+                if (!(alone >> r & 1u))
                     continue;
-                int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
-                alone |= (unsigned)h << r;
-                ++checked;
-                hits += h;
-                if (h != (int)(got >> r & 1u))
-                    fail_msg("camera %d (eye %g %g %g) pixel (%d, %d) step %d ray %d: alone %d, in four %u", cam,
-                             (double)eye.x, (double)eye.y, (double)eye.z, x, y, step, r, h, got >> r & 1u);
-                if (h && (memcmp(&one.t, &four[r].t, sizeof one.t) || memcmp(&one.p, &four[r].p, sizeof one.p) ||
-                          memcmp(&one.n, &four[r].n, sizeof one.n) || one.splat != four[r].splat ||
-                          one.leaf != four[r].leaf))
-                    fail_msg("camera %d pixel (%d, %d) step %d ray %d: hits differ (t %.9g vs %.9g, n %.9g %.9g "
-                             "%.9g vs %.9g %.9g %.9g)",
-                             cam, x, y, step, r, (double)one.t, (double)four[r].t, (double)one.n.x, (double)one.n.y,
-                             (double)one.n.z, (double)four[r].n.x, (double)four[r].n.y, (double)four[r].n.z);
-                if (h) {
-                    sg_vec3 uvw = sg_v3(sg_test_rand01(&rng), sg_test_rand01(&rng), sg_test_rand01(&rng));
-                    if (q % 4 == 0) /* the box's faces and corners */
-                        uvw = sg_v3((float)(q & 1), (float)(q >> 1 & 1), 0.0f);
-                    sg_vec3 a = sg_iso_leaf_normal(iso, one.leaf, uvw), b = sg_iso_leaf_normal_reference(iso, one.leaf, uvw);
-                    if (memcmp(&a, &b, sizeof a))
-                        fail_msg("leaf %u at (%.9g %.9g %.9g): normal %.9g %.9g %.9g, reference %.9g %.9g %.9g", one.leaf,
-                                 (double)uvw.x, (double)uvw.y, (double)uvw.z, (double)a.x, (double)a.y, (double)a.z,
-                                 (double)b.x, (double)b.y, (double)b.z);
-                }
+                /* the traversal's normal kernel equals its scalar reference */
+                sg_vec3 uvw = sg_v3(sg_test_rand01(&rng), sg_test_rand01(&rng), sg_test_rand01(&rng));
+                if (q % 4 == 0) /* the box's faces and corners */
+                    uvw = sg_v3((float)(q & 1), (float)(q >> 1 & 1), 0.0f);
+                uint32_t leaf = four[r].leaf;
+                sg_vec3 na = sg_iso_leaf_normal(iso, leaf, uvw), nb = sg_iso_leaf_normal_reference(iso, leaf, uvw);
+                if (memcmp(&na, &nb, sizeof na))
+                    fail_msg("leaf %u at (%.9g %.9g %.9g): normal %.9g %.9g %.9g, reference %.9g %.9g %.9g", leaf,
+                             (double)uvw.x, (double)uvw.y, (double)uvw.z, (double)na.x, (double)na.y, (double)na.z,
+                             (double)nb.x, (double)nb.y, (double)nb.z);
             }
             diverged += alone != 0 && alone != mask;
         }
@@ -716,41 +722,6 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
     assert_true(hits > checked / 5 && hits < checked * 9 / 10 && diverged > 100);
     sg_iso_destroy(iso);
     sg_world_destroy(w);
-}
-
-/* Checks sixteen rays' packet hits (got, hits[]) against each ray alone:
- * the same hit or miss, the same t, p, n, splat and leaf, bit for bit;
- * entries outside mask untouched (they were set to 0x5A bytes). Returns
- * the mask of rays that hit alone; counts into *checked and *hits. */
-static unsigned check16(const sg_iso *iso, const sg_ray rays[16], unsigned mask, unsigned got, const sg_hit hits[16],
-                        const char *where, int *checked, int *nhits)
-{
-    unsigned alone = 0;
-    for (int r = 0; r < 16; ++r) {
-        if (!(mask >> r & 1u)) {
-            sg_hit untouched;
-            memset(&untouched, 0x5A, sizeof untouched);
-            if (memcmp(&hits[r], &untouched, sizeof untouched) != 0)
-                fail_msg("%s ray %d outside the mask was written", where, r);
-            continue;
-        }
-        sg_hit one;
-        int h = sg_iso_intersect(iso, &rays[r], &one, NULL);
-        alone |= (unsigned)h << r;
-        ++*checked;
-        *nhits += h;
-        if (h != (int)(got >> r & 1u))
-            fail_msg("%s ray %d (dir %.9g %.9g %.9g): alone %d, in sixteen %u", where, r, (double)rays[r].dir.x,
-                     (double)rays[r].dir.y, (double)rays[r].dir.z, h, got >> r & 1u);
-        if (h && (memcmp(&one.t, &hits[r].t, sizeof one.t) || memcmp(&one.p, &hits[r].p, sizeof one.p) ||
-                  memcmp(&one.n, &hits[r].n, sizeof one.n) || one.splat != hits[r].splat || one.leaf != hits[r].leaf))
-            fail_msg("%s ray %d: hits differ (t %.9g vs %.9g, leaf %u vs %u, n %.9g %.9g %.9g vs %.9g %.9g %.9g)",
-                     where, r, (double)one.t, (double)hits[r].t, one.leaf, hits[r].leaf, (double)one.n.x,
-                     (double)one.n.y, (double)one.n.z, (double)hits[r].n.x, (double)hits[r].n.y, (double)hits[r].n.z);
-        if (!h && hits[r].splat != SG_INVALID_ID)
-            fail_msg("%s ray %d: a miss in sixteen does not say so", where, r);
-    }
-    return alone;
 }
 
 /* Sixteen rays at once (4 x 4 blocks, row-major as the viewer's) get the
@@ -792,7 +763,7 @@ static void intersect16_matches_single(float lod_px)
                     memset(sixteen, 0x5A, sizeof sixteen);
                     unsigned got = sg_iso_intersect16(iso, rays, mask, sixteen, NULL);
                     snprintf(where, sizeof where, "eye %d flags %u block (%d, %d)", ei, flags[fi], x, y);
-                    check16(iso, rays, mask, got, sixteen, where, &checked, &hits);
+                    check_packet(iso, 16, rays, mask, got, sixteen, where, &checked, &hits);
                 }
     printf("intersect16 (lod %g px): %d rays checked, %d hits\n", (double)lod_px, checked, hits);
     assert_true(hits > checked / 4);
@@ -854,7 +825,7 @@ static void test_iso_intersect16_matches_single_bunny(void **state)
             unsigned got = sg_iso_intersect16(iso, rays, mask, sixteen, NULL);
             snprintf(where, sizeof where, "camera %d (eye %g %g %g) block (%d, %d) step %d", cam, (double)eye.x,
                      (double)eye.y, (double)eye.z, x, y, step);
-            unsigned alone = check16(iso, rays, mask, got, sixteen, where, &checked, &hits);
+            unsigned alone = check_packet(iso, 16, rays, mask, got, sixteen, where, &checked, &hits);
             diverged += alone != 0 && alone != mask;
         }
     }
