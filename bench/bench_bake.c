@@ -213,26 +213,6 @@ typedef struct centre_info {
 
 /* ---- options --------------------------------------------------------- */
 
-static int parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return 0;
-    *out = v;
-    return 1;
-}
-
-static int parse_int_opt(const char *s, long lo, long hi, int *out)
-{
-    long v;
-    if (!parse_long(s, lo, hi, &v))
-        return 0;
-    *out = (int)v;
-    return 1;
-}
-
 static int parse_list(const char *s, unsigned long long lo, unsigned long long hi, size_t *vals, int *n)
 {
     return sg_cli_size_list("list", s, lo, hi, vals, MAX_LIST, n, NULL) == SG_OK;
@@ -385,30 +365,30 @@ static int parse_options(int argc, char **argv, options *o)
             if (!parse_spacings(v, o->spacings, &o->n_spacings))
                 return fail("--spacings '%s': want up to %d values >= 0 or 'all'", v, MAX_LIST);
         } else if (strcmp(a, "--direct-photons") == 0) {
-            if (!parse_long(v, SG_PHOTON_BLOCK, 1L << 34, &lv))
+            if (!bench_parse_long(v, SG_PHOTON_BLOCK, 1L << 34, &lv))
                 return fail("--direct-photons '%s': want %d..2^34", v, SG_PHOTON_BLOCK);
             o->direct_photons = (size_t)lv;
         } else if (strcmp(a, "--size-ks") == 0) {
             if (!parse_list(v, 1, 4096, o->size_ks, &o->n_size_ks))
                 return fail("--size-ks '%s': want up to %d values in 1..4096", v, MAX_LIST);
         } else if (strcmp(a, "--size-photons") == 0) {
-            if (!parse_long(v, SG_PHOTON_BLOCK, 1L << 34, &lv))
+            if (!bench_parse_long(v, SG_PHOTON_BLOCK, 1L << 34, &lv))
                 return fail("--size-photons '%s': want %d..2^34", v, SG_PHOTON_BLOCK);
             o->size_photons = (size_t)lv;
         } else if (strcmp(a, "--ks") == 0) {
             if (!parse_list(v, 1, 4096, o->ks, &o->n_ks))
                 return fail("--ks '%s': want up to %d values in 1..4096", v, MAX_LIST);
         } else if (strcmp(a, "--size") == 0) {
-            if (!parse_int_opt(v, 8, 4096, &o->size))
+            if (!bench_parse_int(v, 8, 4096, &o->size))
                 return fail("--size '%s': want 8..4096", v);
         } else if (strcmp(a, "--frame-size") == 0) {
-            if (!parse_int_opt(v, 8, 4096, &o->frame_size))
+            if (!bench_parse_int(v, 8, 4096, &o->frame_size))
                 return fail("--frame-size '%s': want 8..4096", v);
         } else if (strcmp(a, "--ref-spp") == 0) {
-            if (!parse_int_opt(v, 2, 1 << 20, &o->ref_spp))
+            if (!bench_parse_int(v, 2, 1 << 20, &o->ref_spp))
                 return fail("--ref-spp '%s': want 2..1048576", v);
         } else if (strcmp(a, "--max-spp") == 0) {
-            if (!parse_int_opt(v, 2, 1 << 16, &o->max_spp) || (o->max_spp & (o->max_spp - 1)))
+            if (!bench_parse_int(v, 2, 1 << 16, &o->max_spp) || (o->max_spp & (o->max_spp - 1)))
                 return fail("--max-spp '%s': want a power of 2 in 2..65536", v);
         } else if (strcmp(a, "--target") == 0) {
             char *end;
@@ -416,10 +396,10 @@ static int parse_options(int argc, char **argv, options *o)
             if (*end || !(o->target > 0 && o->target < 1))
                 return fail("--target '%s': want a relMSE in (0, 1)", v);
         } else if (strcmp(a, "--runs") == 0) {
-            if (!parse_int_opt(v, 1, 100, &o->runs))
+            if (!bench_parse_int(v, 1, 100, &o->runs))
                 return fail("--runs '%s': want 1..100", v);
         } else if (strcmp(a, "--threads") == 0) {
-            if (!parse_int_opt(v, 1, 4096, &o->threads))
+            if (!bench_parse_int(v, 1, 4096, &o->threads))
                 return fail("--threads '%s': want 1..4096", v);
         } else if (strcmp(a, "--out-dir") == 0)
             o->out_dir = v;
@@ -441,100 +421,23 @@ static int parse_options(int argc, char **argv, options *o)
 /* ---- machine and files (as bench_ref.c) --------------------------------- */
 
 
-/* The first three fields of /proc/loadavg: others' work on the cores. */
+/* The load averages at the start and the end (bench_load_avg). */
 static char rp_load[2][64];
-static void load_avg(char *out, size_t cap)
-{
-    snprintf(out, cap, "unknown");
-    FILE *f = fopen("/proc/loadavg", "r");
-    if (!f)
-        return;
-    double a, b, c;
-    if (fscanf(f, "%lf %lf %lf", &a, &b, &c) == 3)
-        snprintf(out, cap, "%.2f %.2f %.2f", a, b, c);
-    fclose(f);
-}
-
-
-
-
-
-static const char *rel_path(const char *p, char *buf, size_t cap)
-{
-    const char *s = strstr(p, "shared/data/");
-    if (!s)
-        return p;
-    snprintf(buf, cap, "../%s", s);
-    return buf;
-}
-
-static void csv_text(FILE *f, const char *s)
-{
-    if (!strpbrk(s, ",\"\n")) {
-        fputs(s, f);
-        return;
-    }
-    fputc('"', f);
-    for (; *s; s++) {
-        if (*s == '"')
-            fputc('"', f);
-        fputc(*s, f);
-    }
-    fputc('"', f);
-}
 
 /* ---- scene (bench_ref.c's construction) ------------------------------- */
 
-typedef struct scene_setup {
-    float scale;
-    sg_vec3 translate;
-    sg_aabb world_box;
-    sg_camera camera;
-    int have_envmap;
-} scene_setup;
-
-static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
+/* The scene (bench_common.h), as bench_ref and bench_bake both build it. */
+static bench_scene_desc scene_desc(const options *o)
 {
-    sg_ground_placement pl;
-    sg_status st = bench_place_mesh(o->mesh, SCENE_LENGTH, &pl, err);
-    if (st != SG_OK)
-        return st;
-    s->scale = pl.scale;
-    s->translate = pl.translate;
-    s->world_box = pl.placed;
-    s->have_envmap = access(o->envmap, R_OK) == 0;
-    return sg_camera_frame(s->world_box, sg_v3(view_dir[0], view_dir[1], view_dir[2]), sg_v3(0, 1, 0), FOV_DEG,
-                           1.0f, FRAME_MARGIN, &s->camera, err);
-}
-
-static int scene_json(const options *o, const scene_setup *s, size_t points, char *out, size_t cap)
-{
-    char mesh[2048], env[2048], envpart[2200];
-    if (!bench_json_escape(o->mesh, mesh, sizeof mesh) || !bench_json_escape(o->envmap, env, sizeof env))
-        return 0;
-    if (s->have_envmap)
-        snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
-    else
-        snprintf(envpart, sizeof envpart, "{\"builtin\": \"sky\"}");
-    const sg_camera *c = &s->camera;
-    sg_vec3 look = sg_v3_add(c->eye, c->forward);
-    int n = snprintf(out, cap,
-                     "{\"models\": ["
-                     "{\"path\": \"%s\", \"points\": %zu,"
-                     " \"transform\": {\"translate\": [%.9g, %.9g, %.9g], \"scale\": %.9g},"
-                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}},"
-                     "{\"builtin\": \"ground\","
-                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}],"
-                     " \"envmap\": %s,"
-                     " \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, %.9g],"
-                     " \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], \"fov_deg\": %g}],"
-                     " \"render\": {\"max_depth\": %d}}",
-                     mesh, points, (double)s->translate.x, (double)s->translate.y, (double)s->translate.z,
-                     (double)s->scale, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO,
-                     (double)GROUND_ALBEDO, (double)GROUND_ALBEDO, (double)GROUND_ALBEDO, envpart, (double)c->eye.x,
-                     (double)c->eye.y, (double)c->eye.z, (double)look.x, (double)look.y, (double)look.z,
-                     (double)FOV_DEG, MAX_DEPTH);
-    return n > 0 && (size_t)n < cap;
+    return (bench_scene_desc){.mesh = o->mesh,
+                              .envmap = o->envmap,
+                              .length = SCENE_LENGTH,
+                              .view_dir = {view_dir[0], view_dir[1], view_dir[2]},
+                              .fov_deg = FOV_DEG,
+                              .margin = FRAME_MARGIN,
+                              .model_albedo = DRAGON_ALBEDO,
+                              .ground_albedo = GROUND_ALBEDO,
+                              .max_depth = MAX_DEPTH};
 }
 
 /* ---- the reference at pixel centres --------------------------------------- */
@@ -1065,9 +968,9 @@ static void csv_tail(FILE *f, const report *rp, size_t points, int with_ref, con
     else
         fputs(",,,", f);
     const char *slash = strrchr(rp->env_used, '/');
-    csv_text(f, slash ? slash + 1 : rp->env_used);
+    bench_csv_text(f, slash ? slash + 1 : rp->env_used);
     fputc(',', f);
-    csv_text(f, rp->machine);
+    bench_csv_text(f, rp->machine);
     fputc('\n', f);
 }
 
@@ -1170,7 +1073,7 @@ static void write_md(FILE *f, const void *ctx)
                "k = 8, MLS surface), scaled by %.4g and translated by (%.4g, %.4g, %.4g) so that it is %.0f units "
                "long and stands on y = 0, Lambert albedo %.1f; builtin ground (albedo %.1f); envmap %s. Camera: "
                "40° vertical fov, the dragon framed from the front-left, above.\n\n",
-            rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x,
+            bench_rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x,
             (double)rp->translate.y, (double)rp->translate.z, (double)SCENE_LENGTH, (double)DRAGON_ALBEDO,
             (double)GROUND_ALBEDO, rp->env_used);
     fprintf(f, "Bake: `sg_photons_trace` (seed %d, max depth 8, Russian roulette from bounce 2: the defaults), "
@@ -1320,12 +1223,13 @@ int main(int argc, char **argv)
            omp_get_max_threads(), o.threads, o.quick ? " (quick)" : "");
 
     sg_error err;
-    scene_setup setup;
-    if (setup_scene(&o, &setup, &err) != SG_OK)
+    const bench_scene_desc sd = scene_desc(&o);
+    bench_scene setup;
+    if (bench_scene_setup(&sd, &setup, &err) != SG_OK)
         return fail("%s", err.message);
     static char env_buf[4200];
     const char *env_used =
-        setup.have_envmap ? rel_path(o.envmap, env_buf, sizeof env_buf) : "builtin sky (envmap file not found)";
+        setup.have_envmap ? bench_rel_path(o.envmap, env_buf, sizeof env_buf) : "builtin sky (envmap file not found)";
     printf("bench_bake: envmap %s; error images %dx%d, reference %d spp at pixel centres, curve spp 1..%d; "
            "frames %dx%d; ks",
            env_used, o.size, o.size, o.ref_spp, o.max_spp, o.frame_size, o.frame_size);
@@ -1346,7 +1250,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < o.n_curve; i++)
         if (o.curve_sizes[i] > max_curve)
             max_curve = o.curve_sizes[i];
-    load_avg(rp_load[0], sizeof rp_load[0]);
+    bench_load_avg(rp_load[0], sizeof rp_load[0]);
 
     for (int si = 0; si < o.n_sizes && status == 0; si++) {
         size_t n = o.sizes[si];
@@ -1356,7 +1260,7 @@ int main(int argc, char **argv)
         sg_ref_result ref = {0};
         float exposure = 0.0f;
         ref_row *rr = NULL;         /* this size's sg_ref_render speed row */
-        if (!scene_json(&o, &setup, n, json, sizeof json)) {
+        if (!bench_scene_json(&sd, &setup, n, json, sizeof json)) {
             status = fail("scene JSON too long (paths?)");
             break;
         }
@@ -1503,7 +1407,7 @@ int main(int argc, char **argv)
         sg_scene_file_free(&sf);
     }
 
-    load_avg(rp_load[1], sizeof rp_load[1]);
+    bench_load_avg(rp_load[1], sizeof rp_load[1]);
     double total_s = omp_get_wtime() - t_start;
     printf("\nsummary (%s, %d threads; total %.0f s; load average at start %s, at end %s)\n", machine, o.threads,
            total_s, rp_load[0], rp_load[1]);

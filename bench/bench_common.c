@@ -157,3 +157,102 @@ double bench_load1(void)
     }
     return l;
 }
+
+int bench_parse_long(const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int bench_parse_int(const char *s, long lo, long hi, int *out)
+{
+    long v;
+    if (!bench_parse_long(s, lo, hi, &v))
+        return 0;
+    *out = (int)v;
+    return 1;
+}
+
+void bench_load_avg(char *out, size_t cap)
+{
+    snprintf(out, cap, "unknown");
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f)
+        return;
+    double a, b, c;
+    if (fscanf(f, "%lf %lf %lf", &a, &b, &c) == 3)
+        snprintf(out, cap, "%.2f %.2f %.2f", a, b, c);
+    fclose(f);
+}
+
+const char *bench_rel_path(const char *p, char *buf, size_t cap)
+{
+    const char *s = strstr(p, "shared/data/");
+    if (!s)
+        return p;
+    snprintf(buf, cap, "../%s", s);
+    return buf;
+}
+
+void bench_csv_text(FILE *f, const char *s)
+{
+    if (!strpbrk(s, ",\"\n")) {
+        fputs(s, f);
+        return;
+    }
+    fputc('"', f);
+    for (; *s; s++) {
+        if (*s == '"')
+            fputc('"', f);
+        fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+sg_status bench_scene_setup(const bench_scene_desc *d, bench_scene *s, sg_error *err)
+{
+    sg_ground_placement pl;
+    sg_status st = bench_place_mesh(d->mesh, d->length, &pl, err);
+    if (st != SG_OK)
+        return st;
+    s->scale = pl.scale;
+    s->translate = pl.translate;
+    s->world_box = pl.placed;
+    s->have_envmap = access(d->envmap, R_OK) == 0;
+    return sg_camera_frame(s->world_box, d->view_dir, sg_v3(0, 1, 0), d->fov_deg, 1.0f, d->margin, &s->camera, err);
+}
+
+int bench_scene_json(const bench_scene_desc *d, const bench_scene *s, size_t points, char *out, size_t cap)
+{
+    char mesh[2048], env[2048], envpart[2200];
+    if (!bench_json_escape(d->mesh, mesh, sizeof mesh) || !bench_json_escape(d->envmap, env, sizeof env))
+        return 0;
+    if (s->have_envmap)
+        snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
+    else
+        snprintf(envpart, sizeof envpart, "{\"builtin\": \"sky\"}");
+    const sg_camera *c = &s->camera;
+    sg_vec3 look = sg_v3_add(c->eye, c->forward);
+    const double ma = d->model_albedo, ga = d->ground_albedo;
+    int n = snprintf(out, cap,
+                     "{\"models\": ["
+                     "{\"path\": \"%s\", \"points\": %zu,"
+                     " \"transform\": {\"translate\": [%.9g, %.9g, %.9g], \"scale\": %.9g},"
+                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}},"
+                     "{\"builtin\": \"ground\","
+                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}],"
+                     " \"envmap\": %s,"
+                     " \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, %.9g],"
+                     " \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], \"fov_deg\": %g}],"
+                     " \"render\": {\"max_depth\": %d}}",
+                     mesh, points, (double)s->translate.x, (double)s->translate.y, (double)s->translate.z,
+                     (double)s->scale, ma, ma, ma, ga, ga, ga, envpart, (double)c->eye.x, (double)c->eye.y,
+                     (double)c->eye.z, (double)look.x, (double)look.y, (double)look.z, (double)d->fov_deg,
+                     d->max_depth);
+    return n > 0 && (size_t)n < cap;
+}

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "io/mesh.h"
+#include "render/camera.h"
 #include "math/vec3.h"
 
 /* A width x height frame cut into size x size tiles, numbered row by row
@@ -76,10 +77,54 @@ int bench_json_escape(const char *s, char *out, size_t cap);
  * cache key). */
 uint64_t bench_mix_file(uint64_t key, const char *path);
 
+/* A whole decimal number in [lo, hi]: 1 and *out set, else 0 (trailing
+ * characters, overflow and an empty string are errors). */
+int bench_parse_long(const char *s, long lo, long hi, long *out);
+int bench_parse_int(const char *s, long lo, long hi, int *out);
+
+/* The first three fields of /proc/loadavg ("unknown" where unreadable). */
+void bench_load_avg(char *out, size_t cap);
+
+/* A path under the shared data folder as the docs name it, relative to
+ * the checkout ("../shared/data/..."), in buf; other paths as they are. */
+const char *bench_rel_path(const char *p, char *buf, size_t cap);
+
+/* A CSV field: quoted when it holds a comma, quote or newline. */
+void bench_csv_text(FILE *f, const char *s);
+
 /* Where the benchmarks put a scanned mesh: sg_mesh_ground_placement
  * (io/mesh.h) of the mesh file's vertex box, `length` world units along its
  * longest side. SG_ERR_INVALID_ARG, naming the file, for an empty or
  * degenerate mesh; the mesh reader's errors otherwise. */
 sg_status bench_place_mesh(const char *mesh_path, float length, sg_ground_placement *out, sg_error *err);
+
+/* The scene bench_ref and bench_bake share: the mesh placed on the
+ * builtin ground (bench_place_mesh), framed by one camera from view_dir,
+ * lit by the envmap file, or by the builtin sky where that file is
+ * missing. */
+typedef struct bench_scene_desc {
+    const char *mesh, *envmap;
+    float length;            /* world units along the mesh's longest side   */
+    sg_vec3 view_dir;        /* the camera looks along it                   */
+    float fov_deg;           /* vertical field of view                      */
+    float margin;            /* sg_camera_frame's margin                    */
+    float model_albedo, ground_albedo;
+    int max_depth;           /* "render": {"max_depth"} of the scene file   */
+} bench_scene_desc;
+
+typedef struct bench_scene {
+    float scale;          /* mesh units -> world                     */
+    sg_vec3 translate;    /* after scaling: centred in x, z; y_min 0 */
+    sg_aabb world_box;    /* the mesh's vertex box in world space    */
+    sg_camera camera;     /* framing world_box (aspect 1)            */
+    int have_envmap;      /* d->envmap exists                        */
+} bench_scene;
+
+sg_status bench_scene_setup(const bench_scene_desc *d, bench_scene *s, sg_error *err);
+
+/* The scene file text with `points` samples of the mesh; 1 if it fit in
+ * cap. Render settings other than max_depth are left to the caller (they
+ * go into cache keys, not into the world). */
+int bench_scene_json(const bench_scene_desc *d, const bench_scene *s, size_t points, char *out, size_t cap);
 
 #endif

@@ -144,26 +144,6 @@ typedef struct curve_row {
 
 /* ---- options --------------------------------------------------------- */
 
-static int parse_int(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return 0;
-    *out = v;
-    return 1;
-}
-
-static int parse_int_opt(const char *s, long lo, long hi, int *out)
-{
-    long v;
-    if (!parse_int(s, lo, hi, &v))
-        return 0;
-    *out = (int)v;
-    return 1;
-}
-
 static int parse_sizes(const char *s, options *o)
 {
     return sg_cli_size_list("--sizes", s, 100, 100000000ull, o->sizes, MAX_SIZES, &o->size_count, NULL) == SG_OK;
@@ -207,28 +187,28 @@ static int parse_options(int argc, char **argv, options *o)
             if (!parse_sizes(v, o))
                 return fail("--sizes '%s': want up to %d counts >= 100, comma-separated", v, MAX_SIZES);
         } else if (strcmp(a, "--threads") == 0) {
-            if (!parse_int_opt(v, 1, 4096, &o->threads))
+            if (!bench_parse_int(v, 1, 4096, &o->threads))
                 return fail("--threads '%s': want 1..4096", v);
         } else if (strcmp(a, "--runs") == 0) {
-            if (!parse_int_opt(v, 1, 100, &o->runs))
+            if (!bench_parse_int(v, 1, 100, &o->runs))
                 return fail("--runs '%s': want 1..100", v);
         } else if (strcmp(a, "--speed-size") == 0) {
-            if (!parse_int_opt(v, 8, 4096, &o->speed_size))
+            if (!bench_parse_int(v, 8, 4096, &o->speed_size))
                 return fail("--speed-size '%s': want 8..4096", v);
         } else if (strcmp(a, "--speed-spp") == 0) {
-            if (!parse_int_opt(v, 1, 65536, &o->speed_spp))
+            if (!bench_parse_int(v, 1, 65536, &o->speed_spp))
                 return fail("--speed-spp '%s': want 1..65536", v);
         } else if (strcmp(a, "--curve-points") == 0) {
-            if (!parse_int(v, 0, 100000000, &o->curve_points))
+            if (!bench_parse_long(v, 0, 100000000, &o->curve_points))
                 return fail("--curve-points '%s': want 0 (none) or a point count", v);
         } else if (strcmp(a, "--ref-size") == 0) {
-            if (!parse_int_opt(v, 8, 4096, &o->ref_size))
+            if (!bench_parse_int(v, 8, 4096, &o->ref_size))
                 return fail("--ref-size '%s': want 8..4096", v);
         } else if (strcmp(a, "--ref-spp") == 0) {
-            if (!parse_int_opt(v, 1, 1 << 20, &o->ref_spp))
+            if (!bench_parse_int(v, 1, 1 << 20, &o->ref_spp))
                 return fail("--ref-spp '%s': want 1..1048576", v);
         } else if (strcmp(a, "--max-spp") == 0) {
-            if (!parse_int_opt(v, 1, 1 << 16, &o->max_spp) || (o->max_spp & (o->max_spp - 1)))
+            if (!bench_parse_int(v, 1, 1 << 16, &o->max_spp) || (o->max_spp & (o->max_spp - 1)))
                 return fail("--max-spp '%s': want a power of 2 in 1..65536", v);
         } else if (strcmp(a, "--out-dir") == 0)
             o->out_dir = v;
@@ -253,58 +233,18 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- scene ------------------------------------------------------------- */
 
-typedef struct scene_setup {
-    float scale;          /* mesh units -> world                   */
-    sg_vec3 translate;    /* after scaling: centred in x, z; y_min 0 */
-    sg_aabb world_box;    /* the mesh's vertex box in world space  */
-    sg_camera camera;     /* framing world_box (aspect 1)          */
-    int have_envmap;      /* o->envmap exists                      */
-} scene_setup;
-
-static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
+/* The scene (bench_common.h), as bench_ref and bench_bake both build it. */
+static bench_scene_desc scene_desc(const options *o)
 {
-    sg_ground_placement pl;
-    sg_status st = bench_place_mesh(o->mesh, SCENE_LENGTH, &pl, err);
-    if (st != SG_OK)
-        return st;
-    s->scale = pl.scale;
-    s->translate = pl.translate;
-    s->world_box = pl.placed;
-    s->have_envmap = access(o->envmap, R_OK) == 0;
-    return sg_camera_frame(s->world_box, sg_v3(view_dir[0], view_dir[1], view_dir[2]), sg_v3(0, 1, 0), FOV_DEG,
-                           1.0f, FRAME_MARGIN, &s->camera, err);
-}
-
-/* The scene file text for `points` samples; render settings are left to
- * the caller (they go into the cache key, not into the world). */
-static int scene_json(const options *o, const scene_setup *s, size_t points, char *out, size_t cap)
-{
-    char mesh[2048], env[2048], envpart[2200];
-    if (!bench_json_escape(o->mesh, mesh, sizeof mesh) || !bench_json_escape(o->envmap, env, sizeof env))
-        return 0;
-    if (s->have_envmap)
-        snprintf(envpart, sizeof envpart, "{\"path\": \"%s\"}", env);
-    else
-        snprintf(envpart, sizeof envpart, "{\"builtin\": \"sky\"}");
-    const sg_camera *c = &s->camera;
-    sg_vec3 look = sg_v3_add(c->eye, c->forward);
-    int n = snprintf(out, cap,
-                     "{\"models\": ["
-                     "{\"path\": \"%s\", \"points\": %zu,"
-                     " \"transform\": {\"translate\": [%.9g, %.9g, %.9g], \"scale\": %.9g},"
-                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}},"
-                     "{\"builtin\": \"ground\","
-                     " \"material\": {\"type\": \"lambert\", \"albedo\": [%g, %g, %g], \"use_point_colors\": false}}],"
-                     " \"envmap\": %s,"
-                     " \"cameras\": [{\"name\": \"main\", \"eye\": [%.9g, %.9g, %.9g],"
-                     " \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], \"fov_deg\": %g}],"
-                     " \"render\": {\"max_depth\": %d}}",
-                     mesh, points, (double)s->translate.x, (double)s->translate.y, (double)s->translate.z,
-                     (double)s->scale, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO, (double)DRAGON_ALBEDO,
-                     (double)GROUND_ALBEDO, (double)GROUND_ALBEDO, (double)GROUND_ALBEDO, envpart, (double)c->eye.x,
-                     (double)c->eye.y, (double)c->eye.z, (double)look.x, (double)look.y, (double)look.z,
-                     (double)FOV_DEG, MAX_DEPTH);
-    return n > 0 && (size_t)n < cap;
+    return (bench_scene_desc){.mesh = o->mesh,
+                              .envmap = o->envmap,
+                              .length = SCENE_LENGTH,
+                              .view_dir = {view_dir[0], view_dir[1], view_dir[2]},
+                              .fov_deg = FOV_DEG,
+                              .margin = FRAME_MARGIN,
+                              .model_albedo = DRAGON_ALBEDO,
+                              .ground_albedo = GROUND_ALBEDO,
+                              .max_depth = MAX_DEPTH};
 }
 
 /* ---- measuring ----------------------------------------------------------- */
@@ -648,32 +588,6 @@ typedef struct report {
     const char *ref_path;
 } report;
 
-/* A path under the shared data folder as the docs name it, relative to the
- * checkout ("../shared/data/..."), not this machine's absolute path. */
-static const char *rel_path(const char *p, char *buf, size_t cap)
-{
-    const char *s = strstr(p, "shared/data/");
-    if (!s)
-        return p;
-    snprintf(buf, cap, "../%s", s);
-    return buf;
-}
-
-static void csv_text(FILE *f, const char *s)
-{
-    if (!strpbrk(s, ",\"\n")) {
-        fputs(s, f);
-        return;
-    }
-    fputc('"', f);
-    for (; *s; s++) {
-        if (*s == '"')
-            fputc('"', f);
-        fputc(*s, f);
-    }
-    fputc('"', f);
-}
-
 static void write_speed_csv(FILE *f, const void *ctx)
 {
     const report *rp = ctx;
@@ -684,7 +598,7 @@ static void write_speed_csv(FILE *f, const void *ctx)
     for (int i = 0; i < rp->speed_count; i++) {
         const speed_row *r = &rp->speed[i];
         int ref = r->paths > 0;
-        csv_text(f, rp->machine);
+        bench_csv_text(f, rp->machine);
         fprintf(f, ",%d,%zu,%s,%d,", rp->o->threads, r->points, r->kind, r->width);
         if (ref)
             fprintf(f, "%d", r->spp);
@@ -725,9 +639,9 @@ static void write_curve_csv(FILE *f, const void *ctx)
                 rp->o->threads);
         fprintf(f, "%.5f,", r->cpu_seconds);
         const char *slash = strrchr(rp->env_used, '/');
-        csv_text(f, slash ? slash + 1 : rp->env_used);
+        bench_csv_text(f, slash ? slash + 1 : rp->env_used);
         fputc(',', f);
-        csv_text(f, rp->machine);
+        bench_csv_text(f, rp->machine);
         fputc('\n', f);
     }
 }
@@ -763,7 +677,7 @@ static void write_md(FILE *f, const void *ctx)
                "albedo %.1f; builtin ground (30 x 30, albedo %.1f); envmap %s. Camera: 40° vertical fov, "
                "framing the dragon from the front-left, above. Paths: max_depth %d, Russian roulette from "
                "bounce 3.\n\n",
-            rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x, (double)rp->translate.y,
+            bench_rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x, (double)rp->translate.y,
             (double)rp->translate.z, (double)SCENE_LENGTH, (double)DRAGON_ALBEDO, (double)GROUND_ALBEDO,
             rp->env_used, MAX_DEPTH);
     fprintf(f, "## Speed\n\n");
@@ -856,12 +770,13 @@ int main(int argc, char **argv)
            o.threads, o.quick ? " (quick)" : "");
 
     sg_error err;
-    scene_setup setup;
+    const bench_scene_desc sd = scene_desc(&o);
+    bench_scene setup;
     double t0 = omp_get_wtime();
-    if (setup_scene(&o, &setup, &err) != SG_OK)
+    if (bench_scene_setup(&sd, &setup, &err) != SG_OK)
         return fail("%s", err.message);
     static char env_buf[4200];
-    const char *env_used = setup.have_envmap ? rel_path(o.envmap, env_buf, sizeof env_buf) : "builtin sky (envmap file not found)";
+    const char *env_used = setup.have_envmap ? bench_rel_path(o.envmap, env_buf, sizeof env_buf) : "builtin sky (envmap file not found)";
     printf("bench_ref: mesh %s: scale %.5g, translate (%.4g, %.4g, %.4g); vertex box in world (%.3g %.3g %.3g)-"
            "(%.3g %.3g %.3g) (%.1f s)\n",
            o.mesh, (double)setup.scale, (double)setup.translate.x, (double)setup.translate.y,
@@ -885,7 +800,7 @@ int main(int argc, char **argv)
         size_t n = o.sizes[si];
         sg_scene_file sf = {0};
         sg_world *w = NULL;
-        if (!scene_json(&o, &setup, n, json, sizeof json)) {
+        if (!bench_scene_json(&sd, &setup, n, json, sizeof json)) {
             status = fail("scene JSON too long (paths?)");
             break;
         }

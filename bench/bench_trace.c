@@ -116,17 +116,6 @@ typedef struct row {
 
 /* ---- options --------------------------------------------------------- */
 
-static int parse_int(const char *s, int lo, int hi, int *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return 0;
-    *out = (int)v;
-    return 1;
-}
-
 static int parse_sizes(const char *s, options *o)
 {
     return sg_cli_size_list("--sizes", s, 2, 100000000ull, o->sizes, MAX_SIZES, &o->size_count, NULL) == SG_OK;
@@ -202,10 +191,10 @@ static int parse_options(int argc, char **argv, options *o)
             if (!parse_box(v, o->closeup_box))
                 return fail("--closeup-box '%s': want x0,y0,z0,x1,y1,z1 with x0<x1, y0<y1, z0<z1", v);
         } else if (strcmp(a, "--frames") == 0) {
-            if (!parse_int(v, 1, 1000, &o->frames))
+            if (!bench_parse_int(v, 1, 1000, &o->frames))
                 return fail("--frames '%s': want 1..1000", v);
         } else if (strcmp(a, "--threads") == 0) {
-            if (!parse_int(v, 1, 4096, &o->threads))
+            if (!bench_parse_int(v, 1, 4096, &o->threads))
                 return fail("--threads '%s': want 1..4096", v);
         } else if (strcmp(a, "--csv") == 0)
             o->csv = v;
@@ -340,22 +329,6 @@ typedef struct report {
     const char *mesh;
 } report;
 
-/* A CSV field: quoted when it holds a comma, quote or newline. */
-static void csv_text(FILE *f, const char *s)
-{
-    if (!strpbrk(s, ",\"\n")) {
-        fputs(s, f);
-        return;
-    }
-    fputc('"', f);
-    for (; *s; s++) {
-        if (*s == '"')
-            fputc('"', f);
-        fputc(*s, f);
-    }
-    fputc('"', f);
-}
-
 static void write_csv(FILE *f, const void *ctx)
 {
     const report *rp = ctx;
@@ -365,7 +338,7 @@ static void write_csv(FILE *f, const void *ctx)
           f);
     for (int i = 0; i < rp->count; i++) {
         const row *r = &rp->rows[i];
-        csv_text(f, rp->machine);
+        bench_csv_text(f, rp->machine);
         fprintf(f, ",%d,%zu,%s,%s,%s,%.4f,%.2f,%.3f,%.4f,%.4f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f,"
                    "%.4f,%.5f\n",
                 rp->threads, r->points, r->view, r->surface, r->refine, r->build_s, r->memory_mb,
