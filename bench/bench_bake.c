@@ -452,49 +452,20 @@ static sg_status centre_render(const sg_world *w, const sg_camera *cam, int size
     return sg_ref_render(w, &d, out, err);
 }
 
-/* The key of a cached reference: the scene (all parts) with the reference's
- * size, spp, seed and depth, the files' sizes and times, a version. */
-static uint64_t ref_key(sg_scene_file *sf, int size, int spp, uint32_t version)
-{
-    sf->render.width = sf->render.height = size;
-    sf->render.spp = spp;
-    sf->render.seed = REF_SEED;
-    sf->render.max_depth = MAX_DEPTH;
-    uint64_t key = sg_scene_file_hash(sf, SG_SCENE_HASH_ALL);
-    key = bench_mix_file(key, sf->models[0].path);
-    key = bench_mix_file(key, sf->env.path);
-    return sg_mix64(key ^ version);
-}
-
 static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, const sg_camera *cam,
                                       const options *o, sg_ref_result *ref, centre_info *ci, sg_error *err)
 {
-    uint64_t key = ref_key(sf, o->size, o->ref_spp, CACHE_VERSION) ^ CENTRE_TAG;
-    char base[3900], se_path[4000], note_path[4000];
+    uint64_t key = bench_ref_key(sf, o->size, o->ref_spp, REF_SEED, MAX_DEPTH, CACHE_VERSION) ^ CENTRE_TAG;
+    char base[3900];
     if (snprintf(base, sizeof base, "%s/refc_%016" PRIx64, o->cache_dir, key) >= (int)sizeof base)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "cache folder path too long: %s", o->cache_dir);
     snprintf(ci->path, sizeof ci->path, "%s.exr", base);
-    snprintf(se_path, sizeof se_path, "%s.stderr.exr", base);
-    snprintf(note_path, sizeof note_path, "%s.txt", base);
     memset(ref, 0, sizeof *ref);
-    FILE *note = fopen(note_path, "r");
-    if (note) {
-        double secs = 0;
-        unsigned long long paths = 0;
-        int ok = fscanf(note, "seconds %lf paths %llu", &secs, &paths) == 2;
-        fclose(note);
-        sg_error ignored;
-        if (ok && sg_image_read_exr(ci->path, &ref->mean, &ignored) == SG_OK) {
-            if (sg_image_read_exr(se_path, &ref->std_error, &ignored) == SG_OK && ref->mean.width == o->size &&
-                ref->mean.height == o->size && ref->std_error.width == o->size && ref->std_error.height == o->size) {
-                ref->seconds = ci->seconds = secs;
-                ref->paths = ci->paths = paths;
-                ci->cached = 1;
-                return SG_OK;
-            }
-            sg_image_free(&ref->mean);
-            sg_image_free(&ref->std_error);
-        }
+    if (bench_ref_cache_load(base, o->size, &ref->mean, &ref->std_error, &ref->seconds, &ref->paths)) {
+        ci->seconds = ref->seconds;
+        ci->paths = ref->paths;
+        ci->cached = 1;
+        return SG_OK;
     }
     printf("  centred reference: %dx%d at %d spp (%.3g paths) -> %s\n", o->size, o->size, o->ref_spp,
            (double)o->size * o->size * o->ref_spp, ci->path);
@@ -505,18 +476,7 @@ static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, cons
     ci->seconds = ref->seconds;
     ci->paths = ref->paths;
     ci->cached = 0;
-    sg_error werr;
-    if (!bench_make_dirs(o->cache_dir))
-        fprintf(stderr, "bench_bake: warning: cannot create %s: %s\n", o->cache_dir, strerror(errno));
-    else if (sg_image_write_exr(&ref->mean, ci->path, &werr) != SG_OK ||
-             sg_image_write_exr(&ref->std_error, se_path, &werr) != SG_OK)
-        fprintf(stderr, "bench_bake: warning: reference not cached: %s\n", werr.message);
-    else {
-        FILE *f = fopen(note_path, "w");
-        if (!f || fprintf(f, "seconds %.6f paths %llu\n", ref->seconds, (unsigned long long)ref->paths) < 0 ||
-            fclose(f) != 0)
-            fprintf(stderr, "bench_bake: warning: cannot write %s\n", note_path);
-    }
+    bench_ref_cache_store("bench_bake", o->cache_dir, base, &ref->mean, &ref->std_error, ref->seconds, ref->paths);
     return SG_OK;
 }
 
@@ -525,7 +485,7 @@ static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, cons
  * against the centred reference. NAN when absent. */
 static double jitter_vs_centre(sg_scene_file *sf, const options *o, const sg_image *centre)
 {
-    uint64_t key = ref_key(sf, o->size, BENCH_REF_SPP, BENCH_REF_CACHE_VERSION);
+    uint64_t key = bench_ref_key(sf, o->size, BENCH_REF_SPP, REF_SEED, MAX_DEPTH, BENCH_REF_CACHE_VERSION);
     char path[4200];
     snprintf(path, sizeof path, "%s/ref_%016" PRIx64 ".exr", o->cache_dir, key);
     sg_image img = {0};

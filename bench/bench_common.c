@@ -256,3 +256,71 @@ int bench_scene_json(const bench_scene_desc *d, const bench_scene *s, size_t poi
                      d->max_depth);
     return n > 0 && (size_t)n < cap;
 }
+
+uint64_t bench_ref_key(sg_scene_file *sf, int size, int spp, uint64_t seed, int max_depth, uint32_t version)
+{
+    sf->render.width = sf->render.height = size;
+    sf->render.spp = spp;
+    sf->render.seed = seed;
+    sf->render.max_depth = max_depth;
+    uint64_t key = sg_scene_file_hash(sf, SG_SCENE_HASH_ALL);
+    key = bench_mix_file(key, sf->models[0].path);
+    key = bench_mix_file(key, sf->env.path);
+    return sg_mix64(key ^ version);
+}
+
+/* The three file names of a cached reference (bench_ref_cache_load). */
+static int cache_paths(const char *base, char mean[4096], char se[4096], char note[4096])
+{
+    return snprintf(mean, 4096, "%s.exr", base) < 4096 && snprintf(se, 4096, "%s.stderr.exr", base) < 4096 &&
+           snprintf(note, 4096, "%s.txt", base) < 4096;
+}
+
+int bench_ref_cache_load(const char *base, int size, sg_image *mean, sg_image *std_error, double *seconds,
+                         uint64_t *paths)
+{
+    char mean_path[4096], se_path[4096], note_path[4096];
+    memset(mean, 0, sizeof *mean);
+    memset(std_error, 0, sizeof *std_error);
+    if (!cache_paths(base, mean_path, se_path, note_path))
+        return 0;
+    FILE *note = fopen(note_path, "r");
+    if (!note)
+        return 0;
+    double secs = 0;
+    unsigned long long n = 0;
+    int ok = fscanf(note, "seconds %lf paths %llu", &secs, &n) == 2;
+    fclose(note);
+    sg_error ignored;
+    if (ok && sg_image_read_exr(mean_path, mean, &ignored) == SG_OK &&
+        sg_image_read_exr(se_path, std_error, &ignored) == SG_OK && mean->width == size && mean->height == size &&
+        std_error->width == size && std_error->height == size) {
+        *seconds = secs;
+        *paths = n;
+        return 1;
+    }
+    sg_image_free(mean);
+    sg_image_free(std_error);
+    return 0;
+}
+
+void bench_ref_cache_store(const char *prog, const char *cache_dir, const char *base, const sg_image *mean,
+                           const sg_image *std_error, double seconds, uint64_t paths)
+{
+    char mean_path[4096], se_path[4096], note_path[4096];
+    sg_error werr;
+    if (!cache_paths(base, mean_path, se_path, note_path))
+        fprintf(stderr, "%s: warning: reference not cached: path too long\n", prog);
+    else if (!bench_make_dirs(cache_dir))
+        fprintf(stderr, "%s: warning: cannot create %s: %s\n", prog, cache_dir, strerror(errno));
+    else if (sg_image_write_exr(mean, mean_path, &werr) != SG_OK || sg_image_write_exr(std_error, se_path, &werr) != SG_OK)
+        fprintf(stderr, "%s: warning: reference not cached: %s\n", prog, werr.message);
+    else {
+        FILE *f = fopen(note_path, "w");
+        int ok = f && fprintf(f, "seconds %.6f paths %llu\n", seconds, (unsigned long long)paths) >= 0;
+        if (f && fclose(f) != 0)
+            ok = 0;
+        if (!ok)
+            fprintf(stderr, "%s: warning: cannot write %s\n", prog, note_path);
+    }
+}

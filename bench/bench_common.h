@@ -10,7 +10,9 @@
 #include <stdio.h>
 
 #include "core/error.h"
+#include "io/image.h"
 #include "io/mesh.h"
+#include "io/scene_file.h"
 #include "render/camera.h"
 #include "math/vec3.h"
 
@@ -97,6 +99,23 @@ void bench_csv_text(FILE *f, const char *s);
  * longest side. SG_ERR_INVALID_ARG, naming the file, for an empty or
  * degenerate mesh; the mesh reader's errors otherwise. */
 sg_status bench_place_mesh(const char *mesh_path, float length, sg_ground_placement *out, sg_error *err);
+
+/* The key of a cached reference: the scene (all parts) with the
+ * reference's size (square), spp, seed and depth set in sf->render, the
+ * model and envmap files' sizes and times, and a version of the cache. */
+uint64_t bench_ref_key(sg_scene_file *sf, int size, int spp, uint64_t seed, int max_depth, uint32_t version);
+
+/* A path-traced reference cached as BASE.exr (the mean), BASE.stderr.exr
+ * (its standard error) and BASE.txt ("seconds S paths N", written last:
+ * with it, both images are complete). bench_ref_cache_load: 1 with the
+ * images, seconds and paths when all three are there and the images are
+ * size x size; else 0, nothing allocated. bench_ref_cache_store: writes
+ * them; a failure is a warning naming prog on stderr (the cache only
+ * saves time). */
+int bench_ref_cache_load(const char *base, int size, sg_image *mean, sg_image *std_error, double *seconds,
+                         uint64_t *paths);
+void bench_ref_cache_store(const char *prog, const char *cache_dir, const char *base, const sg_image *mean,
+                           const sg_image *std_error, double seconds, uint64_t paths);
 
 /* The scene bench_ref and bench_bake share: the mesh placed on the
  * builtin ground (bench_place_mesh), framed by one camera from view_dir,

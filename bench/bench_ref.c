@@ -433,48 +433,20 @@ typedef struct reference {
     char path[4096];       /* its EXR                                        */
 } reference;
 
-
 static sg_status get_reference(const sg_world *w, sg_scene_file *sf, const sg_camera *cam, const options *o,
                                double est_paths_s, reference *ref, sg_error *err)
 {
     /* The key covers everything the image depends on except the thread
      * count: scene, camera, render settings, file contents (by size and
      * time) and the cache format. */
-    sf->render.width = sf->render.height = o->ref_size;
-    sf->render.spp = o->ref_spp;
-    sf->render.seed = REF_SEED;
-    sf->render.max_depth = MAX_DEPTH;
-    uint64_t key = sg_scene_file_hash(sf, SG_SCENE_HASH_ALL);
-    key = bench_mix_file(key, sf->models[0].path);
-    key = bench_mix_file(key, sf->env.path);
-    key = sg_mix64(key ^ CACHE_VERSION);
-    char base[3900], se_path[4000], note_path[4000];
+    uint64_t key = bench_ref_key(sf, o->ref_size, o->ref_spp, REF_SEED, MAX_DEPTH, CACHE_VERSION);
+    char base[3900];
     if (snprintf(base, sizeof base, "%s/ref_%016" PRIx64, o->cache_dir, key) >= (int)sizeof base)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "cache folder path too long: %s", o->cache_dir);
     snprintf(ref->path, sizeof ref->path, "%s.exr", base);
-    snprintf(se_path, sizeof se_path, "%s.stderr.exr", base);
-    snprintf(note_path, sizeof note_path, "%s.txt", base);
-
-    /* The note is written last: with it, both images are complete. */
-    FILE *note = fopen(note_path, "r");
-    if (note) {
-        double secs = 0;
-        unsigned long long paths = 0;
-        int ok = fscanf(note, "seconds %lf paths %llu", &secs, &paths) == 2;
-        fclose(note);
-        sg_error ignored;
-        if (ok && sg_image_read_exr(ref->path, &ref->mean, &ignored) == SG_OK) {
-            if (sg_image_read_exr(se_path, &ref->std_error, &ignored) == SG_OK &&
-                ref->mean.width == o->ref_size && ref->mean.height == o->ref_size &&
-                ref->std_error.width == o->ref_size && ref->std_error.height == o->ref_size) {
-                ref->seconds = secs;
-                ref->paths = paths;
-                ref->cached = 1;
-                return SG_OK;
-            }
-            sg_image_free(&ref->mean);
-            sg_image_free(&ref->std_error);
-        }
+    if (bench_ref_cache_load(base, o->ref_size, &ref->mean, &ref->std_error, &ref->seconds, &ref->paths)) {
+        ref->cached = 1;
+        return SG_OK;
     }
 
     double paths = (double)o->ref_size * o->ref_size * o->ref_spp;
@@ -491,19 +463,7 @@ static sg_status get_reference(const sg_world *w, sg_scene_file *sf, const sg_ca
     ref->seconds = res.seconds;
     ref->paths = res.paths;
     ref->cached = 0;
-    /* The cache only saves time: failing to write it is a warning. */
-    sg_error werr;
-    if (!bench_make_dirs(o->cache_dir))
-        fprintf(stderr, "bench_ref: warning: cannot create %s: %s\n", o->cache_dir, strerror(errno));
-    else if (sg_image_write_exr(&ref->mean, ref->path, &werr) != SG_OK ||
-             sg_image_write_exr(&ref->std_error, se_path, &werr) != SG_OK)
-        fprintf(stderr, "bench_ref: warning: reference not cached: %s\n", werr.message);
-    else {
-        FILE *f = fopen(note_path, "w");
-        if (!f || fprintf(f, "seconds %.6f paths %llu\n", ref->seconds, (unsigned long long)ref->paths) < 0 ||
-            fclose(f) != 0)
-            fprintf(stderr, "bench_ref: warning: cannot write %s\n", note_path);
-    }
+    bench_ref_cache_store("bench_ref", o->cache_dir, base, &ref->mean, &ref->std_error, ref->seconds, ref->paths);
     return SG_OK;
 }
 
