@@ -5,7 +5,7 @@
  * bench_gi.c), kept to compare the two (DESIGN.md "Measuring").
  *
  * Scene: as bench_ref.c, the same construction and view: the Stanford
- * dragon sampled to each size, scaled to SCENE_LENGTH units along its
+ * dragon sampled to each size, scaled to BENCH_SCENE_LENGTH units along its
  * longest side, standing on y = 0, Lambert albedo 0.7, on the builtin
  * ground (albedo 0.5), under courtyard.exr (the builtin "sky" when absent);
  * a JSON string through sg_scene_file_parse and sg_world_create.
@@ -84,12 +84,6 @@
 #define DEFAULT_MESH SG_SHARED_DATA_DIR "/meshes/stanford_dragon/dragon_vrip.ply"
 #define DEFAULT_ENVMAP SG_SHARED_DATA_DIR "/envmaps/blender_studiolights/courtyard.exr"
 /* Scene and view: bench_ref.c's, value for value (same JSON, same camera). */
-#define SCENE_LENGTH 10.0f
-#define FOV_DEG 40.0f
-#define FRAME_MARGIN 0.9f
-#define DRAGON_ALBEDO 0.7f
-#define GROUND_ALBEDO 0.5f
-#define MAX_DEPTH 8            /* path tracer: its default                       */
 #define RR_DEPTH 3             /* path tracer: its default                       */
 #define BAKE_SEED 1
 #define REF_SEED 1
@@ -103,8 +97,6 @@
 #define MAX_LIST 16
 #define MAX_BAKES 256
 #define MAX_CURVE 24
-
-static const float view_dir[3] = {0.6f, -0.35f, -1.0f};
 
 static const char usage[] =
     "usage: bench_bake [options]\n"
@@ -418,27 +410,8 @@ static int parse_options(int argc, char **argv, options *o)
     return -1;
 }
 
-/* ---- machine and files (as bench_ref.c) --------------------------------- */
-
-
 /* The load averages at the start and the end (bench_load_avg). */
 static char rp_load[2][64];
-
-/* ---- scene (bench_ref.c's construction) ------------------------------- */
-
-/* The scene (bench_common.h), as bench_ref and bench_bake both build it. */
-static bench_scene_desc scene_desc(const options *o)
-{
-    return (bench_scene_desc){.mesh = o->mesh,
-                              .envmap = o->envmap,
-                              .length = SCENE_LENGTH,
-                              .view_dir = {view_dir[0], view_dir[1], view_dir[2]},
-                              .fov_deg = FOV_DEG,
-                              .margin = FRAME_MARGIN,
-                              .model_albedo = DRAGON_ALBEDO,
-                              .ground_albedo = GROUND_ALBEDO,
-                              .max_depth = MAX_DEPTH};
-}
 
 /* ---- the reference at pixel centres --------------------------------------- */
 
@@ -447,7 +420,7 @@ static bench_scene_desc scene_desc(const options *o)
 static sg_status centre_render(const sg_world *w, const sg_camera *cam, int size, int spp, uint64_t seed,
                                int threads, sg_ref_result *out, sg_error *err)
 {
-    sg_ref_desc d = {.camera = *cam, .width = size, .height = size, .spp = spp, .max_depth = MAX_DEPTH,
+    sg_ref_desc d = {.camera = *cam, .width = size, .height = size, .spp = spp, .max_depth = BENCH_SCENE_MAX_DEPTH,
                      .rr_depth = RR_DEPTH, .seed = seed, .threads = threads, .pixel_centres = 1};
     return sg_ref_render(w, &d, out, err);
 }
@@ -455,7 +428,7 @@ static sg_status centre_render(const sg_world *w, const sg_camera *cam, int size
 static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, const sg_camera *cam,
                                       const options *o, sg_ref_result *ref, centre_info *ci, sg_error *err)
 {
-    uint64_t key = bench_ref_key(sf, o->size, o->ref_spp, REF_SEED, MAX_DEPTH, CACHE_VERSION) ^ CENTRE_TAG;
+    uint64_t key = bench_ref_key(sf, o->size, o->ref_spp, REF_SEED, BENCH_SCENE_MAX_DEPTH, CACHE_VERSION) ^ CENTRE_TAG;
     char base[3900];
     if (snprintf(base, sizeof base, "%s/refc_%016" PRIx64, o->cache_dir, key) >= (int)sizeof base)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "cache folder path too long: %s", o->cache_dir);
@@ -485,7 +458,7 @@ static sg_status get_centre_reference(const sg_world *w, sg_scene_file *sf, cons
  * against the centred reference. NAN when absent. */
 static double jitter_vs_centre(sg_scene_file *sf, const options *o, const sg_image *centre)
 {
-    uint64_t key = bench_ref_key(sf, o->size, BENCH_REF_SPP, REF_SEED, MAX_DEPTH, BENCH_REF_CACHE_VERSION);
+    uint64_t key = bench_ref_key(sf, o->size, BENCH_REF_SPP, REF_SEED, BENCH_SCENE_MAX_DEPTH, BENCH_REF_CACHE_VERSION);
     char path[4200];
     snprintf(path, sizeof path, "%s/ref_%016" PRIx64 ".exr", o->cache_dir, key);
     sg_image img = {0};
@@ -561,7 +534,7 @@ static sg_status ref_render_speed(const sg_world *w, const sg_camera *cam, const
                                   int spp, ref_row *r, sg_error *err)
 {
     sg_ref_desc d = {.camera = *cam, .width = o->frame_size, .height = o->frame_size, .spp = spp,
-                     .max_depth = MAX_DEPTH, .rr_depth = RR_DEPTH, .seed = REF_SEED, .threads = o->threads};
+                     .max_depth = BENCH_SCENE_MAX_DEPTH, .rr_depth = RR_DEPTH, .seed = REF_SEED, .threads = o->threads};
     double best = INFINITY;
     for (int run = 0; run < o->runs; run++) {
         sg_ref_result res = {0};
@@ -1034,8 +1007,8 @@ static void write_md(FILE *f, const void *ctx)
                "long and stands on y = 0, Lambert albedo %.1f; builtin ground (albedo %.1f); envmap %s. Camera: "
                "40° vertical fov, the dragon framed from the front-left, above.\n\n",
             bench_rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x,
-            (double)rp->translate.y, (double)rp->translate.z, (double)SCENE_LENGTH, (double)DRAGON_ALBEDO,
-            (double)GROUND_ALBEDO, rp->env_used);
+            (double)rp->translate.y, (double)rp->translate.z, (double)BENCH_SCENE_LENGTH, (double)BENCH_SCENE_MODEL_ALBEDO,
+            (double)BENCH_SCENE_GROUND_ALBEDO, rp->env_used);
     fprintf(f, "Bake: `sg_photons_trace` (seed %d, max depth 8, Russian roulette from bounce 2: the defaults), "
                "then `sg_bake_create_from_photons` once per (k, direct) on the same map (bake s = trace s + "
                "gather s, what `sg_bake_create` takes). direct: `photons` = `direct_samples` -1, the photons "
@@ -1183,7 +1156,7 @@ int main(int argc, char **argv)
            omp_get_max_threads(), o.threads, o.quick ? " (quick)" : "");
 
     sg_error err;
-    const bench_scene_desc sd = scene_desc(&o);
+    const bench_scene_desc sd = bench_dragon_scene(o.mesh, o.envmap);
     bench_scene setup;
     if (bench_scene_setup(&sd, &setup, &err) != SG_OK)
         return fail("%s", err.message);

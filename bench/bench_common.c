@@ -214,6 +214,19 @@ void bench_csv_text(FILE *f, const char *s)
     fputc('"', f);
 }
 
+bench_scene_desc bench_dragon_scene(const char *mesh, const char *envmap)
+{
+    return (bench_scene_desc){.mesh = mesh,
+                              .envmap = envmap,
+                              .length = BENCH_SCENE_LENGTH,
+                              .view_dir = {0.6f, -0.35f, -1.0f},
+                              .fov_deg = BENCH_SCENE_FOV_DEG,
+                              .margin = 0.9f, /* < 1: the bounding sphere of a long model is loose */
+                              .model_albedo = BENCH_SCENE_MODEL_ALBEDO,
+                              .ground_albedo = BENCH_SCENE_GROUND_ALBEDO,
+                              .max_depth = BENCH_SCENE_MAX_DEPTH};
+}
+
 sg_status bench_scene_setup(const bench_scene_desc *d, bench_scene *s, sg_error *err)
 {
     sg_ground_placement pl;

@@ -139,6 +139,17 @@ typedef struct bench_scene {
     int have_envmap;      /* d->envmap exists                        */
 } bench_scene;
 
+/* The dragon scene of bench_ref and bench_bake: SCENE_LENGTH units long,
+ * seen from (0.6, -0.35, -1) with a vertical field of view of FOV_DEG,
+ * Lambert albedos 0.7 (the mesh) and 0.5 (the ground), paths of at most
+ * 8 bounces (the path tracer's default). */
+#define BENCH_SCENE_LENGTH 10.0f
+#define BENCH_SCENE_FOV_DEG 40.0f
+#define BENCH_SCENE_MODEL_ALBEDO 0.7f
+#define BENCH_SCENE_GROUND_ALBEDO 0.5f
+#define BENCH_SCENE_MAX_DEPTH 8
+bench_scene_desc bench_dragon_scene(const char *mesh, const char *envmap);
+
 sg_status bench_scene_setup(const bench_scene_desc *d, bench_scene *s, sg_error *err);
 
 /* The scene file text with `points` samples of the mesh; 1 if it fit in

@@ -2,7 +2,7 @@
  * time: the curve a bake has to beat (DESIGN.md "Measuring").
  *
  * Scene: the Stanford dragon sampled to each size (default 125k and 1M
- * points), scaled to SCENE_LENGTH units along its longest side and standing
+ * points), scaled to BENCH_SCENE_LENGTH units along its longest side and standing
  * on y = 0, Lambert albedo 0.7, on the builtin ground (albedo 0.5), under
  * a real HDR map (courtyard.exr; the builtin "sky" when absent). The scene
  * is a JSON string that goes through sg_scene_file_parse and
@@ -59,12 +59,6 @@
 
 #define DEFAULT_MESH SG_SHARED_DATA_DIR "/meshes/stanford_dragon/dragon_vrip.ply"
 #define DEFAULT_ENVMAP SG_SHARED_DATA_DIR "/envmaps/blender_studiolights/courtyard.exr"
-#define SCENE_LENGTH 10.0f     /* world units along the dragon's longest side  */
-#define FOV_DEG 40.0f          /* vertical field of view                        */
-#define FRAME_MARGIN 0.9f      /* < 1: the bounding sphere of a long model is loose */
-#define DRAGON_ALBEDO 0.7f
-#define GROUND_ALBEDO 0.5f
-#define MAX_DEPTH 8            /* the renderer's default; same for reference and curve */
 #define SECONDARY_PER_HIT 4    /* cosine rays spawned at each primary hit      */
 #define DEFAULT_RUNS 3         /* every timing: best of                         */
 #define REF_SEED 1             /* the converged reference                       */
@@ -76,8 +70,6 @@
 #define MAX_CURVE 32
 
 /* Camera direction: front-left, above, as bench_trace's whole view. */
-static const float view_dir[3] = {0.6f, -0.35f, -1.0f};
-
 static const char usage[] =
     "usage: bench_ref [options]\n"
     "Speed of the reference path tracer and its error against time on the\n"
@@ -233,20 +225,6 @@ static int parse_options(int argc, char **argv, options *o)
 
 /* ---- scene ------------------------------------------------------------- */
 
-/* The scene (bench_common.h), as bench_ref and bench_bake both build it. */
-static bench_scene_desc scene_desc(const options *o)
-{
-    return (bench_scene_desc){.mesh = o->mesh,
-                              .envmap = o->envmap,
-                              .length = SCENE_LENGTH,
-                              .view_dir = {view_dir[0], view_dir[1], view_dir[2]},
-                              .fov_deg = FOV_DEG,
-                              .margin = FRAME_MARGIN,
-                              .model_albedo = DRAGON_ALBEDO,
-                              .ground_albedo = GROUND_ALBEDO,
-                              .max_depth = MAX_DEPTH};
-}
-
 /* ---- measuring ----------------------------------------------------------- */
 
 /* Counters per model traversal (the struct's comment). */
@@ -263,7 +241,7 @@ static void per_traversal(speed_row *r, const sg_ray_stats *st, double seconds)
 
 static sg_ref_desc ref_desc(const sg_camera *cam, int size, int spp, uint64_t seed, int threads)
 {
-    sg_ref_desc d = {.camera = *cam, .width = size, .height = size, .spp = spp, .max_depth = MAX_DEPTH,
+    sg_ref_desc d = {.camera = *cam, .width = size, .height = size, .spp = spp, .max_depth = BENCH_SCENE_MAX_DEPTH,
                      .seed = seed, .threads = threads};
     return d;
 }
@@ -439,7 +417,7 @@ static sg_status get_reference(const sg_world *w, sg_scene_file *sf, const sg_ca
     /* The key covers everything the image depends on except the thread
      * count: scene, camera, render settings, file contents (by size and
      * time) and the cache format. */
-    uint64_t key = bench_ref_key(sf, o->ref_size, o->ref_spp, REF_SEED, MAX_DEPTH, CACHE_VERSION);
+    uint64_t key = bench_ref_key(sf, o->ref_size, o->ref_spp, REF_SEED, BENCH_SCENE_MAX_DEPTH, CACHE_VERSION);
     char base[3900];
     if (snprintf(base, sizeof base, "%s/ref_%016" PRIx64, o->cache_dir, key) >= (int)sizeof base)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "cache folder path too long: %s", o->cache_dir);
@@ -638,8 +616,8 @@ static void write_md(FILE *f, const void *ctx)
                "framing the dragon from the front-left, above. Paths: max_depth %d, Russian roulette from "
                "bounce 3.\n\n",
             bench_rel_path(o->mesh, mesh, sizeof mesh), (double)rp->scale, (double)rp->translate.x, (double)rp->translate.y,
-            (double)rp->translate.z, (double)SCENE_LENGTH, (double)DRAGON_ALBEDO, (double)GROUND_ALBEDO,
-            rp->env_used, MAX_DEPTH);
+            (double)rp->translate.z, (double)BENCH_SCENE_LENGTH, (double)BENCH_SCENE_MODEL_ALBEDO, (double)BENCH_SCENE_GROUND_ALBEDO,
+            rp->env_used, BENCH_SCENE_MAX_DEPTH);
     fprintf(f, "## Speed\n\n");
     fprintf(f, "`ref`: `sg_ref_render`, %dx%d at %d spp (camera, shadow and bounce rays), best of %d. `primary`: "
                "`sg_world_intersect` on the pixel-centre camera rays alone. `secondary`: "
@@ -730,7 +708,7 @@ int main(int argc, char **argv)
            o.threads, o.quick ? " (quick)" : "");
 
     sg_error err;
-    const bench_scene_desc sd = scene_desc(&o);
+    const bench_scene_desc sd = bench_dragon_scene(o.mesh, o.envmap);
     bench_scene setup;
     double t0 = omp_get_wtime();
     if (bench_scene_setup(&sd, &setup, &err) != SG_OK)
