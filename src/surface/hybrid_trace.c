@@ -240,13 +240,15 @@ static inline __attribute__((always_inline)) int take_hit(const sg_hybrid *h, co
     return 1;
 }
 
-static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const sg_tri4_hit *th,
+/* t, b1, b2, front: a triangle kernel's lanes (sg_tri4_hit, sg_tri8_hit). */
+static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const float *t,
+                                                           const float *b1, const float *b2, unsigned front,
                                                            unsigned mask, uint32_t g, best *b)
 {
     int found = 0;
     for (uint32_t l = 0; mask; ++l, mask >>= 1)
         if (mask & 1u)
-            found |= take_hit(h, r, th->t[l], th->b1[l], th->b2[l], (int)(th->front >> l & 1u), g + l, b);
+            found |= take_hit(h, r, t[l], b1[l], b2[l], (int)(front >> l & 1u), g + l, b);
     return found;
 }
 
@@ -272,7 +274,7 @@ static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst
 #else
         unsigned mask = sg_tri_intersect4(&r->tr, &t4, (1u << n) - 1u, r->tmin, bst->t, &th);
 #endif
-        found |= take_hits(h, r, &th, mask, g, bst);
+        found |= take_hits(h, r, th.t, th.b1, th.b2, th.front, mask, g, bst);
     }
     return found;
 }
@@ -585,6 +587,8 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
+    unsigned alike;             /* rays that gather like the packet's first ray
+                                   (same_gather): camera rays, all of them    */
     int eye;                    /* 1: every lane of br leaves one origin        */
     int cone;                   /* 1: and its rays lie within cn                */
     sg_bundle_cone cn;          /* apex (the origin), axis, half-angle widened  */
@@ -789,12 +793,38 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
             }
             sg_tri4_hit th;
             unsigned hm = sg_tri_intersect4(&ri->tr, &t4, (1u << n) - 1u, ri->tmin, bst[i].t, &th);
-            take_hits(h, ri, &th, hm, g, &bst[i]);
+            take_hits(h, ri, th.t, th.b1, th.b2, th.front, hm, g, &bst[i]);
         }
     }
 }
 
 #if SG_V16_SIMD
+/* test_leaf4 for rays that all gather alike (same_gather): the leaf's
+ * triangles are gathered once and each ray tests all of them in one
+ * sg_tri_intersect8 against its own best, taking the crossings in leaf
+ * order. The kernel's far limit is the ray's best before the leaf, where
+ * test_leaf4's second four see the best after the first four: a crossing
+ * between the two is then dropped by take_hit (better()) instead of by
+ * the kernel, so the same crossings are taken, in the same order. */
+static void test_leaf8(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, unsigned lanes, counters *c)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    const sg_tri_ray *t0 = &r[__builtin_ctz(lanes)].tr;
+    c->triangles += count * (uint64_t)__builtin_popcount(lanes);
+    sg_tri8 t8;
+    for (uint32_t l = 0; l < 8; ++l) {
+        const uint32_t *v = h->tri + 3 * (size_t)(first + (l < count ? l : 0));
+        sg_tri8_gather(&t8, (int)l, t0, h->pos + 3 * (size_t)v[0], h->pos + 3 * (size_t)v[1],
+                       h->pos + 3 * (size_t)v[2]);
+    }
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        sg_tri8_hit th;
+        const unsigned hm = sg_tri_intersect8(&r[i].tr, &t8, (1u << count) - 1u, r[i].tmin, bst[i].t, &th);
+        take_hits(h, &r[i], th.t, th.b1, th.b2, th.front, hm, first, &bst[i]);
+    }
+}
+
 /* test_leaf4 across the rays: the rays that gather like the packet's first
  * (one origin and axis order: camera rays) test each triangle in one
  * sg_tri_intersect16, against their own bests, and take its crossings in
@@ -805,17 +835,18 @@ static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *
                         counters *c)
 {
     const int f = __builtin_ctz(lanes);
-    unsigned cls = 0;
-    for (unsigned m = lanes; m; m &= m - 1)
+    unsigned cls = (lanes & P->alike) == lanes ? lanes : 0;
+    for (unsigned m = cls ? 0 : lanes; m; m &= m - 1)
         if (same_gather(&r[f].tr, &r[__builtin_ctz(m)].tr))
             cls |= 1u << __builtin_ctz(m);
-    if (__builtin_popcount(cls) <= SPARSE_LANES)
-        cls = 0;
-    if (lanes & ~cls) {
-        test_leaf4(h, word, r, bst, lanes & ~cls, c);
-        for (unsigned m = lanes & ~cls; m; m &= m - 1)
-            P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
-    }
+    const unsigned few = __builtin_popcount(cls) <= SPARSE_LANES ? cls : 0u;
+    cls &= ~few;
+    if (few)
+        test_leaf8(h, word, r, bst, few, c);
+    if (lanes & ~cls & ~few)
+        test_leaf4(h, word, r, bst, lanes & ~cls & ~few, c);
+    for (unsigned m = lanes & ~cls; m; m &= m - 1)
+        P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
     if (!cls)
         return;
     const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
@@ -989,7 +1020,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
     }
     if (lanes) {
         psoa P;
-        P.cull = 0;
+        P.cull = P.alike = 0;
         P.eye = P.cone = 0;
         const int f = __builtin_ctz(lanes);
         for (int i = 0; i < PW; ++i) {
@@ -1008,6 +1039,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.sh.sy[i] = ri->tr.sy;
             P.sh.sz[i] = ri->tr.sz;
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
+            P.alike |= (unsigned)(lanes >> i & 1u && same_gather(&r[f].tr, &ri->tr)) << i;
         }
 #if SG_BUNDLE_SIMD16
         packet_cone(lanes, &P);

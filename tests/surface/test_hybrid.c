@@ -71,7 +71,9 @@
  *     rays, against the single ray's scalar test, ray by ray, with its
  *     one-eye form sg_bundle_test16_eye for rays from one origin, and
  *     sg_bundle_cone_test, a bundle against a packet's cone, against its
- *     scalar reference and against rays inside the cone.)
+ *     scalar reference and against rays inside the cone, and
+ *     sg_tri_intersect8, a leaf of eight triangles against one ray, against
+ *     its scalar reference.)
  * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
  *                                  sixteen rays (sg_hybrid_intersect16,
  *                                  sg_scene_intersect16), with edge and
@@ -675,6 +677,51 @@ static void test_hybrid_kernels_agree(void **state)
     if (differ)
         fail_msg("triangles: %zu of 20000 groups of 4 differ between SIMD and scalar", differ);
     assert_true(hits > 1000); /* the comparison saw hits, not only misses */
+
+    /* A leaf of up to eight triangles against one ray (sg_tri_intersect8,
+     * the sparse packets' leaf test): random and integer triangles as
+     * above, partial leaves (valid masks) and finite far limits. */
+    size_t diff8 = 0, hits8 = 0, exact8 = 0; /* exact8: hits on the integer leaves */
+    for (int n = 0; n < 20000; ++n) {
+        float v[8][3][3];
+        for (int l = 0; l < 8; ++l)
+            for (int k = 0; k < 3; ++k)
+                for (int a = 0; a < 3; ++a)
+                    v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
+                                            : 4.0f * sg_test_rand01(&rng) - 2.0f;
+        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
+        sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
+                                                                        sg_test_rand01(&rng) - 0.5f, -1));
+        sg_tri_ray tr = sg_tri_ray_prepare(o, d);
+        sg_tri8 t8;
+        for (int l = 0; l < 8; ++l)
+            sg_tri8_gather(&t8, l, &tr, v[l][0], v[l][1], v[l][2]);
+        const unsigned valid = n % 3 == 0 ? (1u << (1 + n % 8)) - 1u : 255u;
+        const float tmax = n % 5 == 4 ? 6.0f * sg_test_rand01(&rng) : INFINITY;
+        sg_tri8_hit a, b;
+        unsigned ma = sg_tri_intersect8(&tr, &t8, valid, 0.0f, tmax, &a);
+        unsigned mb = sg_tri_intersect8_scalar(&tr, &t8, valid, 0.0f, tmax, &b);
+        int same = ma == mb && (a.front & ma) == (b.front & mb), lane = -1;
+        for (int l = 0; l < 8 && same; ++l)
+            if (ma >> l & 1u && !(memcmp(&a.t[l], &b.t[l], 4) == 0 && memcmp(&a.b1[l], &b.b1[l], 4) == 0 &&
+                                  memcmp(&a.b2[l], &b.b2[l], 4) == 0))
+                same = 0, lane = l;
+        if (!same && !diff8)
+            print_message("leaf %d (valid 0x%02x, tmax %g): SIMD mask 0x%02x, scalar 0x%02x; lane %d: t %.9g / %.9g, "
+                          "b1 %.9g / %.9g, b2 %.9g / %.9g\n",
+                          n, valid, (double)tmax, ma, mb, lane, lane < 0 ? 0.0 : (double)a.t[lane],
+                          lane < 0 ? 0.0 : (double)b.t[lane], lane < 0 ? 0.0 : (double)a.b1[lane],
+                          lane < 0 ? 0.0 : (double)b.b1[lane], lane < 0 ? 0.0 : (double)a.b2[lane],
+                          lane < 0 ? 0.0 : (double)b.b2[lane]);
+        diff8 += !same;
+        hits8 += (size_t)__builtin_popcount(ma);
+        /* the integer triangles met by the axis ray: through vertices and
+         * edges, so their hits come from the exact fallback */
+        exact8 += n % 4 == 0 ? (size_t)__builtin_popcount(ma) : 0u;
+    }
+    if (diff8)
+        fail_msg("triangles: %zu of 20000 leaves of 8 differ between SIMD and scalar", diff8);
+    assert_true(hits8 > 1000 && exact8 > 100);
 
 #if SG_V16_SIMD
     /* One triangle against sixteen rays of one origin and axis order
