@@ -19,7 +19,9 @@
  *                                  convex mesh (triangle and LOD hits) meet
  *                                  nothing; inwards they meet the far side.
  *  7. hybrid::hit_sites            weights sum to 1, are the barycentrics,
- *                                  and agree on both sides of an edge.
+ *                                  and agree on both sides of an edge; the
+ *                                  scene hit's dominant site is the sorted
+ *                                  first (ties, clamping, NaN).
  *  8. hybrid::bad_meshes           0 triangles, all degenerate, index out of
  *                                  range, NaN position: INVALID_ARG naming
  *                                  the element; some degenerate: counted and
@@ -536,6 +538,25 @@ static void test_hybrid_hit_sites(void **state)
     /* max 1: the largest weight alone, renormalised. */
     assert_int_equal(sg_hybrid_hit_sites(h, &a, ia, wa, 1), 1);
     assert_float_equal(wa[0], 1.0f, 0.0f);
+    /* A scene hit's site (sg_hybrid__dominant_site, branch-free) is that
+     * first id: barycentrics on a grid of eighths (ties between two and
+     * three weights), beyond [0, 1] (clamped), random, and NaN. */
+    uint64_t rng = 5;
+    const uint32_t v3[3] = {11, 22, 33};
+    for (int n = 0; n < 3000; ++n) {
+        float b1 = n < 400 ? (float)(n % 20 - 2) / 8.0f : 3.0f * sg_test_rand01(&rng) - 1.0f;
+        float b2 = n < 400 ? (float)(n / 20 - 2) / 8.0f : 3.0f * sg_test_rand01(&rng) - 1.0f;
+        if (n % 1000 == 499)
+            b1 = NAN;
+        if (n % 1000 == 999)
+            b2 = NAN;
+        uint32_t id;
+        float wt;
+        sg_hybrid__triangle_sites(v3, b1, b2, &id, &wt, 1);
+        if (sg_hybrid__dominant_site(v3, b1, b2) != id)
+            fail_msg("b1 %g, b2 %g: dominant site %u, sorted first %u", (double)b1, (double)b2,
+                     sg_hybrid__dominant_site(v3, b1, b2), id);
+    }
     sg_hybrid_destroy(h);
     sg_mesh_free(&m);
 }
