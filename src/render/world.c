@@ -357,43 +357,66 @@ float sg_world__box_entry(const sg_aabb *b, const sg_ray *r)
     return t0 <= t1 ? t0 : INFINITY;
 }
 
-void sg_world__box_entry16(const sg_aabb *b, const sg_ray *rays, unsigned mask, float out[16])
-{
 #if SG_V16_SIMD
-    /* sg_world__box_entry's operations on sixteen lanes: the swap as min
-     * and max (v16.h: the scalar ternaries, so a NaN goes the same way),
-     * and an axis the ray is parallel to (d exactly 0) leaves t0 and t1
-     * as they were, or misses the box when the origin is outside its slab. */
-    _Alignas(64) float o[3][16], d[3][16], tmin[16], tmax[16];
-    const int f = __builtin_ctz(mask);
-    for (int i = 0; i < 16; ++i) {
-        const sg_ray *r = &rays[mask >> i & 1u ? i : f]; /* outside mask: a copy, never read */
-        o[0][i] = r->org.x, o[1][i] = r->org.y, o[2][i] = r->org.z;
-        d[0][i] = r->dir.x, d[1][i] = r->dir.y, d[2][i] = r->dir.z;
-        tmin[i] = r->tmin, tmax[i] = r->tmax;
-    }
+/* Sixteen rays as lanes: origins, 1 / direction, and the axes each is
+ * parallel to (a direction component exactly 0). */
+typedef struct rays16 {
+    sg_v16 o[3], inv[3], tmin, tmax;
+    unsigned parallel[3];
+} rays16;
+
+/* sg_world__box_entry's operations on the lanes of R: the swap as min and
+ * max (v16.h: the scalar ternaries, so a NaN goes the same way); an axis
+ * a ray is parallel to leaves its t0 and t1 as they were, or misses the
+ * box when the origin is outside that slab. */
+static sg_v16 box_entry_lanes(const sg_aabb *b, const rays16 *R)
+{
     const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
-    sg_v16 t0 = sg_v16_load(tmin), t1 = sg_v16_load(tmax);
+    sg_v16 t0 = R->tmin, t1 = R->tmax;
     unsigned out_of_slab = 0;
     for (int a = 0; a < 3; ++a) {
-        const sg_v16 oa = sg_v16_load(o[a]), da = sg_v16_load(d[a]);
         const sg_v16 l = sg_v16_set1(lo[a]), h = sg_v16_set1(hi[a]);
-        const unsigned parallel = sg_v16_eq(da, sg_v16_set1(0.0f));
-        out_of_slab |= parallel & (sg_v16_lt(oa, l) | sg_v16_gt(oa, h));
-        const sg_v16 inv = sg_v16_div(sg_v16_set1(1.0f), da);
-        const sg_v16 ta = sg_v16_mul(sg_v16_sub(l, oa), inv), tb = sg_v16_mul(sg_v16_sub(h, oa), inv);
+        out_of_slab |= R->parallel[a] & (sg_v16_lt(R->o[a], l) | sg_v16_gt(R->o[a], h));
+        const sg_v16 ta = sg_v16_mul(sg_v16_sub(l, R->o[a]), R->inv[a]);
+        const sg_v16 tb = sg_v16_mul(sg_v16_sub(h, R->o[a]), R->inv[a]);
         const sg_v16 near = sg_v16_min(tb, ta), far = sg_v16_max(ta, tb); /* ta > tb: swapped */
-        t0 = sg_v16_select(parallel, t0, sg_v16_max(near, t0));
-        t1 = sg_v16_select(parallel, t1, sg_v16_min(far, t1));
+        t0 = sg_v16_select(R->parallel[a], t0, sg_v16_max(near, t0));
+        t1 = sg_v16_select(R->parallel[a], t1, sg_v16_min(far, t1));
     }
-    const unsigned in = sg_v16_le(t0, t1) & ~out_of_slab;
-    _Alignas(64) float e[16];
-    sg_v16_store(e, sg_v16_select(in, t0, sg_v16_set1(INFINITY)));
-    for (unsigned m = mask; m; m &= m - 1)
-        out[__builtin_ctz(m)] = e[__builtin_ctz(m)];
+    return sg_v16_select(sg_v16_le(t0, t1) & ~out_of_slab, t0, sg_v16_set1(INFINITY));
+}
+#endif
+
+void sg_world__box_entry16(const sg_aabb *boxes, size_t n, const sg_ray *rays, unsigned mask, float (*out)[16])
+{
+    if (!mask)
+        return;
+#if SG_V16_SIMD
+    _Alignas(64) float v[8][16]; /* the rays' origins, directions, tmin, tmax */
+    const int f = __builtin_ctz(mask);
+    for (int i = 0; i < 16; ++i) {
+        const sg_ray *r = &rays[mask >> i & 1u ? i : f]; /* outside mask: a copy, never written out */
+        v[0][i] = r->org.x, v[1][i] = r->org.y, v[2][i] = r->org.z;
+        v[3][i] = r->dir.x, v[4][i] = r->dir.y, v[5][i] = r->dir.z;
+        v[6][i] = r->tmin, v[7][i] = r->tmax;
+    }
+    rays16 R = {.tmin = sg_v16_load(v[6]), .tmax = sg_v16_load(v[7])};
+    for (int a = 0; a < 3; ++a) {
+        const sg_v16 d = sg_v16_load(v[3 + a]);
+        R.o[a] = sg_v16_load(v[a]);
+        R.inv[a] = sg_v16_div(sg_v16_set1(1.0f), d);
+        R.parallel[a] = sg_v16_eq(d, sg_v16_set1(0.0f));
+    }
+    for (size_t k = 0; k < n; ++k) {
+        _Alignas(64) float e[16];
+        sg_v16_store(e, box_entry_lanes(&boxes[k], &R));
+        for (unsigned m = mask; m; m &= m - 1)
+            out[k][__builtin_ctz(m)] = e[__builtin_ctz(m)];
+    }
 #else
-    for (unsigned m = mask; m; m &= m - 1)
-        out[__builtin_ctz(m)] = sg_world__box_entry(b, &rays[__builtin_ctz(m)]);
+    for (size_t k = 0; k < n; ++k)
+        for (unsigned m = mask; m; m &= m - 1)
+            out[k][__builtin_ctz(m)] = sg_world__box_entry(&boxes[k], &rays[__builtin_ctz(m)]);
 #endif
 }
 
@@ -517,10 +540,7 @@ unsigned sg_world_intersect16(const sg_world *w, const sg_ray *rays, unsigned ma
     }
     size_t order[16][SORTED_MAX];
     float entry[16][SORTED_MAX], e[SORTED_MAX][16]; /* e[i][r]: ray r's entry into model i's box */
-    if (!mask)
-        return 0;
-    for (size_t i = 0; i < n; ++i)
-        sg_world__box_entry16(&w->model_bounds[i], rays, mask, e[i]);
+    sg_world__box_entry16(w->model_bounds, n, rays, mask, e);
     for (unsigned m = mask; m; m &= m - 1)
         sort_models(n, &e[0][__builtin_ctz(m)], 16, order[__builtin_ctz(m)], entry[__builtin_ctz(m)]);
     /* The order decides each model's tmax, and so the bits: rays are

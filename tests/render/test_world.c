@@ -177,13 +177,13 @@ static void test_world_box_entry16_matches_single(void **state)
                                .tmax = i % 5 == 2 ? 6.0f * sg_test_rand01(&rng) : INFINITY};
         }
         unsigned mask = n % 4 == 3 ? 1u + (unsigned)(65534.0f * sg_test_rand01(&rng)) : 0xFFFFu;
-        float out[16];
+        float out[1][16];
         for (int i = 0; i < 16; ++i)
-            out[i] = -7.0f; /* must stay for lanes outside mask */
-        sg_world__box_entry16(&b, rays, mask, out);
+            out[0][i] = -7.0f; /* must stay for lanes outside mask */
+        sg_world__box_entry16(&b, 1, rays, mask, out);
         for (int i = 0; i < 16; ++i) {
             if (!(mask >> i & 1u)) {
-                differ += out[i] != -7.0f;
+                differ += out[0][i] != -7.0f;
                 continue;
             }
             const float one = sg_world__box_entry(&b, &rays[i]);
@@ -191,12 +191,12 @@ static void test_world_box_entry16_matches_single(void **state)
             parallel += rays[i].dir.x == 0.0f || rays[i].dir.y == 0.0f;
             boundary += rays[i].dir.x == 0.0f && (rays[i].org.x == b.lo.x || rays[i].org.x == b.hi.x) &&
                         one < INFINITY;
-            if (memcmp(&one, &out[i], sizeof one) != 0) {
+            if (memcmp(&one, &out[0][i], sizeof one) != 0) {
                 if (!differ)
                     print_message("box %d ray %d: org (%g, %g, %g) dir (%g, %g, %g): alone %.9g, in sixteen %.9g\n",
                                   n, i, (double)rays[i].org.x, (double)rays[i].org.y, (double)rays[i].org.z,
                                   (double)rays[i].dir.x, (double)rays[i].dir.y, (double)rays[i].dir.z, (double)one,
-                                  (double)out[i]);
+                                  (double)out[0][i]);
                 ++differ;
             }
         }
