@@ -128,19 +128,49 @@ typedef struct sg_tri4 {
     const float *v[4][3];            /* the lanes' vertex pointers (for the fallback)  */
 } sg_tri4;
 
+/* Lane l of a gather of `width` lanes (sg_tri4, sg_tri8): rows a, b, c
+ * ([kx, ky, kz component][lane]) from the triangle (v0, v1, v2), and its
+ * vertex pointers in v[l]. */
+static inline void sg_tri__gather(float *a, float *b, float *c, int width, const float *v[][3], int l,
+                                  const sg_tri_ray *r, const float *v0, const float *v1, const float *v2)
+{
+    const int k[3] = {r->kx, r->ky, r->kz};
+    for (int i = 0; i < 3; ++i) {
+        a[i * width + l] = v0[k[i]] - r->org[k[i]];
+        b[i * width + l] = v1[k[i]] - r->org[k[i]];
+        c[i * width + l] = v2[k[i]] - r->org[k[i]];
+    }
+    v[l][0] = v0;
+    v[l][1] = v1;
+    v[l][2] = v2;
+}
+
+/* sg_tri_intersect on the lanes of `lanes` (vertex pointers v): each hit
+ * lane's t, b1, b2 and front bit written; returns their mask. The scalar
+ * references, and the SIMD kernels' double fallback. */
+static inline unsigned sg_tri__lanes(const sg_tri_ray *r, const float *const v[][3], unsigned lanes, float tmin,
+                                     float tmax, float *t, float *b1, float *b2, unsigned *front)
+{
+    unsigned mask = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        sg_tri_hit h;
+        if (!sg_tri_intersect(r, v[l][0], v[l][1], v[l][2], tmin, tmax, &h))
+            continue;
+        mask |= 1u << l;
+        t[l] = h.t;
+        b1[l] = h.b1;
+        b2[l] = h.b2;
+        *front |= (unsigned)h.front << l;
+    }
+    return mask;
+}
+
 /* Fills lane l of t from the triangle (v0, v1, v2). */
 static inline void sg_tri4_gather(sg_tri4 *t, int l, const sg_tri_ray *r, const float *v0, const float *v1,
                                   const float *v2)
 {
-    const int k[3] = {r->kx, r->ky, r->kz};
-    for (int i = 0; i < 3; ++i) {
-        t->a[i][l] = v0[k[i]] - r->org[k[i]];
-        t->b[i][l] = v1[k[i]] - r->org[k[i]];
-        t->c[i][l] = v2[k[i]] - r->org[k[i]];
-    }
-    t->v[l][0] = v0;
-    t->v[l][1] = v1;
-    t->v[l][2] = v2;
+    sg_tri__gather(t->a[0], t->b[0], t->c[0], 4, t->v, l, r, v0, v1, v2);
 }
 
 typedef struct sg_tri4_hit {
@@ -152,19 +182,8 @@ typedef struct sg_tri4_hit {
 static inline unsigned sg_tri_intersect4_scalar(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
                                                 float tmax, sg_tri4_hit *out)
 {
-    unsigned mask = 0;
     out->front = 0;
-    for (int l = 0; l < 4; ++l) {
-        sg_tri_hit h;
-        if (!(valid >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return sg_tri__lanes(r, t->v, valid & 15u, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 
 #if defined(__SSE2__)
@@ -205,17 +224,7 @@ __attribute__((always_inline)) static inline unsigned sg_tri_intersect4(const sg
     _mm_storeu_ps(out->b1, _mm_mul_ps(V, inv));
     _mm_storeu_ps(out->b2, _mm_mul_ps(Wf, inv));
     out->front = (unsigned)_mm_movemask_ps(_mm_cmpgt_ps(det, zero)) & mask;
-    for (int l = 0; l < 4; ++l) {
-        sg_tri_hit h;
-        if (!(exact0 >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return mask | sg_tri__lanes(r, t->v, exact0, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 #else
 static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
@@ -246,34 +255,15 @@ typedef struct sg_tri8_hit {
 static inline void sg_tri8_gather(sg_tri8 *t, int l, const sg_tri_ray *r, const float *v0, const float *v1,
                                   const float *v2)
 {
-    const int k[3] = {r->kx, r->ky, r->kz};
-    for (int i = 0; i < 3; ++i) {
-        t->a[i][l] = v0[k[i]] - r->org[k[i]];
-        t->b[i][l] = v1[k[i]] - r->org[k[i]];
-        t->c[i][l] = v2[k[i]] - r->org[k[i]];
-    }
-    t->v[l][0] = v0;
-    t->v[l][1] = v1;
-    t->v[l][2] = v2;
+    sg_tri__gather(t->a[0], t->b[0], t->c[0], 8, t->v, l, r, v0, v1, v2);
 }
 
 /* Scalar reference of sg_tri_intersect8 over the gathered lanes. */
 static inline unsigned sg_tri_intersect8_scalar(const sg_tri_ray *r, const sg_tri8 *t, unsigned valid, float tmin,
                                                 float tmax, sg_tri8_hit *out)
 {
-    unsigned mask = 0;
     out->front = 0;
-    for (int l = 0; l < 8; ++l) {
-        sg_tri_hit h;
-        if (!(valid >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return sg_tri__lanes(r, t->v, valid & 255u, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 
 #if defined(__AVX__)
@@ -317,18 +307,7 @@ static inline unsigned sg_tri_intersect8(const sg_tri_ray *r, const sg_tri8 *t, 
     _mm256_storeu_ps(out->b1, _mm256_mul_ps(V, inv));
     _mm256_storeu_ps(out->b2, _mm256_mul_ps(Wf, inv));
     out->front = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(det, zero, _CMP_GT_OQ)) & mask;
-    for (unsigned m = exact0; m; m &= m - 1) {
-        const int l = __builtin_ctz(m);
-        sg_tri_hit h;
-        if (!sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return mask | sg_tri__lanes(r, t->v, exact0, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 #else
 #define SG_TRI8_SIMD 0

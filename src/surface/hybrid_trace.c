@@ -93,9 +93,9 @@ typedef struct entry {
 } entry;
 
 typedef struct tray {
-    float o[3], d[3];
     float tmin;
-    sg_bundle_ray br;  /* the same ray for sphere tests, with the LOD test */
+    sg_bundle_ray br;  /* the ray for sphere tests (origin o, direction d),
+                          with the LOD test                               */
     sg_tri_ray tr;
     int accept_front, accept_back;
     int cull;          /* skip nodes that face the wrong way             */
@@ -119,17 +119,11 @@ static int setup(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, 
         return 0;
     if (ray->dir.x == 0.0f && ray->dir.y == 0.0f && ray->dir.z == 0.0f)
         return 0;
-    r->o[0] = ray->org.x;
-    r->o[1] = ray->org.y;
-    r->o[2] = ray->org.z;
-    r->d[0] = ray->dir.x;
-    r->d[1] = ray->dir.y;
-    r->d[2] = ray->dir.z;
     r->tmin = ray->tmin;
     r->tr = sg_tri_ray_prepare(ray->org, ray->dir);
-    /* From the ray, not copied back from r->o and r->d: those 8-byte
-     * loads of fields just stored 4 bytes at a time stalled on store
-     * forwarding (a third of setup's samples). */
+    /* From the ray, not copied from fields just stored: an 8-byte load of
+     * two 4-byte stores stalled on store forwarding (a third of setup's
+     * samples when the tray kept its own copy of o and d). */
     sg_bundle_ray *br = &r->br;
     br->o[0] = ray->org.x;
     br->o[1] = ray->org.y;
@@ -171,7 +165,8 @@ static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, 
     if (B->sin_cone[l] == 255)
         return NODE_OPEN;
     sg_vec3 n = sg_stree_normal(B, l);
-    float dn = n.x * r->d[0] + n.y * r->d[1] + n.z * r->d[2];
+    const float *o = r->br.o, *d = r->br.d;
+    float dn = n.x * d[0] + n.y * d[1] + n.z * d[2];
     if (!(fabsf(dn) > (float)B->sin_cone[l] * (1.0f / 255.0f) + CONE_MARGIN))
         return NODE_OPEN; /* a silhouette may cross it */
     const int front = dn < 0.0f;
@@ -186,11 +181,11 @@ static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, 
     const float cx = B->cx[l], cy = B->cy[l], cz = B->cz[l];
     const float off = (float)B->offset[l] * (1.0f / 127.0f) * R;
     /* Plane through centre + off n: t = ((c + off n - o) . n) / (d . n). */
-    float num = (cx - r->o[0]) * n.x + (cy - r->o[1]) * n.y + (cz - r->o[2]) * n.z + off;
+    float num = (cx - o[0]) * n.x + (cy - o[1]) * n.y + (cz - o[2]) * n.z + off;
     float t = num / dn;
     if (!(t >= r->tmin))
         return NODE_OPEN;
-    float px = r->o[0] + t * r->d[0] - cx, py = r->o[1] + t * r->d[1] - cy, pz = r->o[2] + t * r->d[2] - cz;
+    float px = o[0] + t * d[0] - cx, py = o[1] + t * d[1] - cy, pz = o[2] + t * d[2] - cz;
     if (!(px * px + py * py + pz * pz <= R * R))
         return NODE_OPEN; /* beside the disk: look at what is really there */
     if (sg_ray_is_self(r->ray, t, n))

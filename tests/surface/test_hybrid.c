@@ -663,6 +663,23 @@ static void test_hybrid_bad_meshes(void **state)
 
 /* ---- 9: SIMD kernels against their scalar references ------------------------ */
 
+/* Case n of the triangle kernels' tests: `count` triangles in v and the
+ * ray's set-up. Every fourth case has integer vertices met by the ray
+ * down the z axis from (0, 0, 5), so that edge functions come out exactly
+ * 0 (the fallback); the others are random. */
+static sg_tri_ray kernel_case(uint64_t *rng, int n, int count, float v[][3][3])
+{
+    for (int l = 0; l < count; ++l)
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a)
+                v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(rng)) - 2.0f
+                                        : 4.0f * sg_test_rand01(rng) - 2.0f;
+    sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(rng) - 0.5f, sg_test_rand01(rng) - 0.5f, 5);
+    sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(rng) - 0.5f,
+                                                                    sg_test_rand01(rng) - 0.5f, -1));
+    return sg_tri_ray_prepare(o, d);
+}
+
 static void test_hybrid_kernels_agree(void **state)
 {
     (void)state;
@@ -672,15 +689,7 @@ static void test_hybrid_kernels_agree(void **state)
     size_t differ = 0, hits = 0;
     for (int n = 0; n < 20000; ++n) {
         float v[4][3][3];
-        for (int l = 0; l < 4; ++l)
-            for (int k = 0; k < 3; ++k)
-                for (int a = 0; a < 3; ++a)
-                    v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
-                                            : 4.0f * sg_test_rand01(&rng) - 2.0f;
-        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
-        sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
-                                                                        sg_test_rand01(&rng) - 0.5f, -1));
-        sg_tri_ray tr = sg_tri_ray_prepare(o, d);
+        sg_tri_ray tr = kernel_case(&rng, n, 4, v);
         sg_tri4 t4;
         for (int l = 0; l < 4; ++l)
             sg_tri4_gather(&t4, l, &tr, v[l][0], v[l][1], v[l][2]);
@@ -705,15 +714,7 @@ static void test_hybrid_kernels_agree(void **state)
     size_t diff8 = 0, hits8 = 0, exact8 = 0; /* exact8: hits on the integer leaves */
     for (int n = 0; n < 20000; ++n) {
         float v[8][3][3];
-        for (int l = 0; l < 8; ++l)
-            for (int k = 0; k < 3; ++k)
-                for (int a = 0; a < 3; ++a)
-                    v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
-                                            : 4.0f * sg_test_rand01(&rng) - 2.0f;
-        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
-        sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
-                                                                        sg_test_rand01(&rng) - 0.5f, -1));
-        sg_tri_ray tr = sg_tri_ray_prepare(o, d);
+        sg_tri_ray tr = kernel_case(&rng, n, 8, v);
         sg_tri8 t8;
         for (int l = 0; l < 8; ++l)
             sg_tri8_gather(&t8, l, &tr, v[l][0], v[l][1], v[l][2]);
