@@ -128,19 +128,49 @@ typedef struct sg_tri4 {
     const float *v[4][3];            /* the lanes' vertex pointers (for the fallback)  */
 } sg_tri4;
 
+/* Lane l of a gather of `width` lanes (sg_tri4, sg_tri8): rows a, b, c
+ * ([kx, ky, kz component][lane]) from the triangle (v0, v1, v2), and its
+ * vertex pointers in v[l]. */
+static inline void sg_tri__gather(float *a, float *b, float *c, int width, const float *v[][3], int l,
+                                  const sg_tri_ray *r, const float *v0, const float *v1, const float *v2)
+{
+    const int k[3] = {r->kx, r->ky, r->kz};
+    for (int i = 0; i < 3; ++i) {
+        a[i * width + l] = v0[k[i]] - r->org[k[i]];
+        b[i * width + l] = v1[k[i]] - r->org[k[i]];
+        c[i * width + l] = v2[k[i]] - r->org[k[i]];
+    }
+    v[l][0] = v0;
+    v[l][1] = v1;
+    v[l][2] = v2;
+}
+
+/* sg_tri_intersect on the lanes of `lanes` (vertex pointers v): each hit
+ * lane's t, b1, b2 and front bit written; returns their mask. The scalar
+ * references, and the SIMD kernels' double fallback. */
+static inline unsigned sg_tri__lanes(const sg_tri_ray *r, const float *const v[][3], unsigned lanes, float tmin,
+                                     float tmax, float *t, float *b1, float *b2, unsigned *front)
+{
+    unsigned mask = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        sg_tri_hit h;
+        if (!sg_tri_intersect(r, v[l][0], v[l][1], v[l][2], tmin, tmax, &h))
+            continue;
+        mask |= 1u << l;
+        t[l] = h.t;
+        b1[l] = h.b1;
+        b2[l] = h.b2;
+        *front |= (unsigned)h.front << l;
+    }
+    return mask;
+}
+
 /* Fills lane l of t from the triangle (v0, v1, v2). */
 static inline void sg_tri4_gather(sg_tri4 *t, int l, const sg_tri_ray *r, const float *v0, const float *v1,
                                   const float *v2)
 {
-    const int k[3] = {r->kx, r->ky, r->kz};
-    for (int i = 0; i < 3; ++i) {
-        t->a[i][l] = v0[k[i]] - r->org[k[i]];
-        t->b[i][l] = v1[k[i]] - r->org[k[i]];
-        t->c[i][l] = v2[k[i]] - r->org[k[i]];
-    }
-    t->v[l][0] = v0;
-    t->v[l][1] = v1;
-    t->v[l][2] = v2;
+    sg_tri__gather(t->a[0], t->b[0], t->c[0], 4, t->v, l, r, v0, v1, v2);
 }
 
 typedef struct sg_tri4_hit {
@@ -152,19 +182,8 @@ typedef struct sg_tri4_hit {
 static inline unsigned sg_tri_intersect4_scalar(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
                                                 float tmax, sg_tri4_hit *out)
 {
-    unsigned mask = 0;
     out->front = 0;
-    for (int l = 0; l < 4; ++l) {
-        sg_tri_hit h;
-        if (!(valid >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return sg_tri__lanes(r, t->v, valid & 15u, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 
 #if defined(__SSE2__)
@@ -205,23 +224,97 @@ __attribute__((always_inline)) static inline unsigned sg_tri_intersect4(const sg
     _mm_storeu_ps(out->b1, _mm_mul_ps(V, inv));
     _mm_storeu_ps(out->b2, _mm_mul_ps(Wf, inv));
     out->front = (unsigned)_mm_movemask_ps(_mm_cmpgt_ps(det, zero)) & mask;
-    for (int l = 0; l < 4; ++l) {
-        sg_tri_hit h;
-        if (!(exact0 >> l & 1u) || !sg_tri_intersect(r, t->v[l][0], t->v[l][1], t->v[l][2], tmin, tmax, &h))
-            continue;
-        mask |= 1u << l;
-        out->t[l] = h.t;
-        out->b1[l] = h.b1;
-        out->b2[l] = h.b2;
-        out->front |= (unsigned)h.front << l;
-    }
-    return mask;
+    return mask | sg_tri__lanes(r, t->v, exact0, tmin, tmax, out->t, out->b1, out->b2, &out->front);
 }
 #else
 static inline unsigned sg_tri_intersect4(const sg_tri_ray *r, const sg_tri4 *t, unsigned valid, float tmin,
                                          float tmax, sg_tri4_hit *out)
 {
     return sg_tri_intersect4_scalar(r, t, valid, tmin, tmax, out);
+}
+#endif
+
+/* ---- One ray against a leaf of up to eight triangles ----------------------
+ *
+ * sg_tri_intersect4 eight lanes wide (AVX): one call tests a whole leaf
+ * (SG_STREE_MAX_LEAF triangles) against one ray, with the same operations
+ * in the same order per lane, so each lane reported hit has
+ * sg_tri_intersect's t, b1, b2 and front, bit for bit; lanes whose edge
+ * function comes out exactly 0.0 are redone by sg_tri_intersect. */
+typedef struct sg_tri8 {
+    float a[3][8], b[3][8], c[3][8]; /* [kx, ky, kz component][lane], origin-relative */
+    const float *v[8][3];            /* the lanes' vertex pointers (for the fallback)  */
+} sg_tri8;
+
+typedef struct sg_tri8_hit {
+    float t[8], b1[8], b2[8];
+    unsigned front; /* bit l: lane l met the counter-clockwise side */
+} sg_tri8_hit;
+
+/* Fills lane l of t from the triangle (v0, v1, v2), as sg_tri4_gather. */
+static inline void sg_tri8_gather(sg_tri8 *t, int l, const sg_tri_ray *r, const float *v0, const float *v1,
+                                  const float *v2)
+{
+    sg_tri__gather(t->a[0], t->b[0], t->c[0], 8, t->v, l, r, v0, v1, v2);
+}
+
+/* Scalar reference of sg_tri_intersect8 over the gathered lanes. */
+static inline unsigned sg_tri_intersect8_scalar(const sg_tri_ray *r, const sg_tri8 *t, unsigned valid, float tmin,
+                                                float tmax, sg_tri8_hit *out)
+{
+    out->front = 0;
+    return sg_tri__lanes(r, t->v, valid & 255u, tmin, tmax, out->t, out->b1, out->b2, &out->front);
+}
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#define SG_TRI8_SIMD 1
+static inline unsigned sg_tri_intersect8(const sg_tri_ray *r, const sg_tri8 *t, unsigned valid, float tmin,
+                                         float tmax, sg_tri8_hit *out)
+{
+    const __m256 sx = _mm256_set1_ps(r->sx), sy = _mm256_set1_ps(r->sy), sz = _mm256_set1_ps(r->sz);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 ax = _mm256_loadu_ps(t->a[0]), ay = _mm256_loadu_ps(t->a[1]), az = _mm256_loadu_ps(t->a[2]);
+    const __m256 bx = _mm256_loadu_ps(t->b[0]), by = _mm256_loadu_ps(t->b[1]), bz = _mm256_loadu_ps(t->b[2]);
+    const __m256 cx = _mm256_loadu_ps(t->c[0]), cy = _mm256_loadu_ps(t->c[1]), cz = _mm256_loadu_ps(t->c[2]);
+    const __m256 Ax = _mm256_sub_ps(ax, _mm256_mul_ps(sx, az)), Ay = _mm256_sub_ps(ay, _mm256_mul_ps(sy, az));
+    const __m256 Bx = _mm256_sub_ps(bx, _mm256_mul_ps(sx, bz)), By = _mm256_sub_ps(by, _mm256_mul_ps(sy, bz));
+    const __m256 Cx = _mm256_sub_ps(cx, _mm256_mul_ps(sx, cz)), Cy = _mm256_sub_ps(cy, _mm256_mul_ps(sy, cz));
+    const __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
+    const __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
+    const __m256 Wf = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+    const unsigned exact0 = (unsigned)_mm256_movemask_ps(_mm256_or_ps(
+                                _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
+                                _mm256_cmp_ps(Wf, zero, _CMP_EQ_OQ))) &
+                            valid;
+    const __m256 anyneg = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
+        _mm256_cmp_ps(Wf, zero, _CMP_LT_OQ));
+    const __m256 anypos = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
+        _mm256_cmp_ps(Wf, zero, _CMP_GT_OQ));
+    const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), Wf);
+    const __m256 T = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(U, _mm256_mul_ps(sz, az)), _mm256_mul_ps(V, _mm256_mul_ps(sz, bz))),
+        _mm256_mul_ps(Wf, _mm256_mul_ps(sz, cz)));
+    const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
+    const __m256 tt = _mm256_mul_ps(T, inv);
+    __m256 ok = _mm256_andnot_ps(_mm256_and_ps(anyneg, anypos), _mm256_cmp_ps(det, zero, _CMP_NEQ_UQ));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(tt, _mm256_set1_ps(tmin), _CMP_GE_OQ),
+                                         _mm256_cmp_ps(tt, _mm256_set1_ps(tmax), _CMP_LE_OQ)));
+    unsigned mask = (unsigned)_mm256_movemask_ps(ok) & valid & ~exact0;
+    _mm256_storeu_ps(out->t, tt);
+    _mm256_storeu_ps(out->b1, _mm256_mul_ps(V, inv));
+    _mm256_storeu_ps(out->b2, _mm256_mul_ps(Wf, inv));
+    out->front = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(det, zero, _CMP_GT_OQ)) & mask;
+    return mask | sg_tri__lanes(r, t->v, exact0, tmin, tmax, out->t, out->b1, out->b2, &out->front);
+}
+#else
+#define SG_TRI8_SIMD 0
+static inline unsigned sg_tri_intersect8(const sg_tri_ray *r, const sg_tri8 *t, unsigned valid, float tmin,
+                                         float tmax, sg_tri8_hit *out)
+{
+    return sg_tri_intersect8_scalar(r, t, valid, tmin, tmax, out);
 }
 #endif
 

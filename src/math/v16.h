@@ -45,6 +45,11 @@ static inline unsigned sg_v16_eq(sg_v16 a, sg_v16 b) { return _mm512_cmp_ps_mask
 /* a != b, NaN included (as the scalar !=) */
 static inline unsigned sg_v16_neq(sg_v16 a, sg_v16 b) { return _mm512_cmp_ps_mask(a, b, _CMP_NEQ_UQ); }
 static inline unsigned sg_v16_gt(sg_v16 a, sg_v16 b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }
+/* Lanes of mask from a, the others from b. */
+static inline sg_v16 sg_v16_select(unsigned mask, sg_v16 a, sg_v16 b)
+{
+    return _mm512_mask_blend_ps((__mmask16)mask, b, a);
+}
 /* The least of the lanes of mask (INFINITY for none); NaN-free input. */
 static inline float sg_v16_min_lanes(sg_v16 a, unsigned mask)
 {
@@ -108,16 +113,20 @@ static inline unsigned sg_v16_neq(sg_v16 a, sg_v16 b)
 {
     return sg_v16__bits(_mm256_cmp_ps(a.lo, b.lo, _CMP_NEQ_UQ), _mm256_cmp_ps(a.hi, b.hi, _CMP_NEQ_UQ));
 }
-/* The least of the lanes of mask (INFINITY for none); NaN-free input. */
-static inline float sg_v16_min_lanes(sg_v16 a, unsigned mask)
+/* Lanes of mask from a, the others from b. */
+static inline sg_v16 sg_v16_select(unsigned mask, sg_v16 a, sg_v16 b)
 {
     const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     const __m256i ml = _mm256_and_si256(_mm256_set1_epi32((int)(mask & 255u)), bit);
     const __m256i mh = _mm256_and_si256(_mm256_set1_epi32((int)(mask >> 8 & 255u)), bit);
-    const __m256 inf = _mm256_set1_ps(INFINITY);
-    const __m256 lo = _mm256_blendv_ps(inf, a.lo, _mm256_castsi256_ps(_mm256_cmpeq_epi32(ml, bit)));
-    const __m256 hi = _mm256_blendv_ps(inf, a.hi, _mm256_castsi256_ps(_mm256_cmpeq_epi32(mh, bit)));
-    __m256 v = _mm256_min_ps(lo, hi);
+    return (sg_v16){_mm256_blendv_ps(b.lo, a.lo, _mm256_castsi256_ps(_mm256_cmpeq_epi32(ml, bit))),
+                    _mm256_blendv_ps(b.hi, a.hi, _mm256_castsi256_ps(_mm256_cmpeq_epi32(mh, bit)))};
+}
+/* The least of the lanes of mask (INFINITY for none); NaN-free input. */
+static inline float sg_v16_min_lanes(sg_v16 a, unsigned mask)
+{
+    const sg_v16 m = sg_v16_select(mask, a, sg_v16_set1(INFINITY));
+    __m256 v = _mm256_min_ps(m.lo, m.hi);
     __m128 x = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
     x = _mm_min_ps(x, _mm_movehl_ps(x, x));
     x = _mm_min_ss(x, _mm_shuffle_ps(x, x, 1));

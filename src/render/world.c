@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "core/alloc.h"
+#include "math/v16.h"
 #include "envmap/analytic.h"
 #include "points/mesh_shapes.h"
 #include "points/model_points.h"
@@ -331,8 +332,9 @@ static void add_world_stats(sg_ray_stats *stats, sg_ray_stats *local, int found)
 }
 
 /* Where the ray enters box b, or INFINITY when it misses it within
- * [tmin, tmax]. Written so that a NaN from 0 * inf loses every comparison. */
-static float box_entry(const sg_aabb *b, const sg_ray *r)
+ * [tmin, tmax]. Written so that a NaN from 0 * inf loses every comparison.
+ * (world_int.h; sg_world__box_entry16 is its SIMD form.) */
+float sg_world__box_entry(const sg_aabb *b, const sg_ray *r)
 {
     const float o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z};
     const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
@@ -355,23 +357,95 @@ static float box_entry(const sg_aabb *b, const sg_ray *r)
     return t0 <= t1 ? t0 : INFINITY;
 }
 
+#if SG_V16_SIMD
+/* Sixteen rays as lanes: origins, 1 / direction, and the axes each is
+ * parallel to (a direction component exactly 0). */
+typedef struct rays16 {
+    sg_v16 o[3], inv[3], tmin, tmax;
+    unsigned parallel[3];
+} rays16;
+
+/* sg_world__box_entry's operations on the lanes of R: the swap as min and
+ * max (v16.h: the scalar ternaries, so a NaN goes the same way); an axis
+ * a ray is parallel to leaves its t0 and t1 as they were, or misses the
+ * box when the origin is outside that slab. */
+static sg_v16 box_entry_lanes(const sg_aabb *b, const rays16 *R)
+{
+    const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+    sg_v16 t0 = R->tmin, t1 = R->tmax;
+    unsigned out_of_slab = 0;
+    for (int a = 0; a < 3; ++a) {
+        const sg_v16 l = sg_v16_set1(lo[a]), h = sg_v16_set1(hi[a]);
+        out_of_slab |= R->parallel[a] & (sg_v16_lt(R->o[a], l) | sg_v16_gt(R->o[a], h));
+        const sg_v16 ta = sg_v16_mul(sg_v16_sub(l, R->o[a]), R->inv[a]);
+        const sg_v16 tb = sg_v16_mul(sg_v16_sub(h, R->o[a]), R->inv[a]);
+        const sg_v16 near = sg_v16_min(tb, ta), far = sg_v16_max(ta, tb); /* ta > tb: swapped */
+        t0 = sg_v16_select(R->parallel[a], t0, sg_v16_max(near, t0));
+        t1 = sg_v16_select(R->parallel[a], t1, sg_v16_min(far, t1));
+    }
+    return sg_v16_select(sg_v16_le(t0, t1) & ~out_of_slab, t0, sg_v16_set1(INFINITY));
+}
+#endif
+
+void sg_world__box_entry16(const sg_aabb *boxes, size_t n, const sg_ray *rays, unsigned mask, float (*out)[16])
+{
+    if (!mask)
+        return;
+#if SG_V16_SIMD
+    _Alignas(64) float v[8][16]; /* the rays' origins, directions, tmin, tmax */
+    const int f = __builtin_ctz(mask);
+    for (int i = 0; i < 16; ++i) {
+        const sg_ray *r = &rays[mask >> i & 1u ? i : f]; /* outside mask: a copy, never written out */
+        v[0][i] = r->org.x, v[1][i] = r->org.y, v[2][i] = r->org.z;
+        v[3][i] = r->dir.x, v[4][i] = r->dir.y, v[5][i] = r->dir.z;
+        v[6][i] = r->tmin, v[7][i] = r->tmax;
+    }
+    rays16 R = {.tmin = sg_v16_load(v[6]), .tmax = sg_v16_load(v[7])};
+    for (int a = 0; a < 3; ++a) {
+        const sg_v16 d = sg_v16_load(v[3 + a]);
+        R.o[a] = sg_v16_load(v[a]);
+        R.inv[a] = sg_v16_div(sg_v16_set1(1.0f), d);
+        R.parallel[a] = sg_v16_eq(d, sg_v16_set1(0.0f));
+    }
+    for (size_t k = 0; k < n; ++k) {
+        _Alignas(64) float e[16];
+        sg_v16_store(e, box_entry_lanes(&boxes[k], &R));
+        for (unsigned m = mask; m; m &= m - 1)
+            out[k][__builtin_ctz(m)] = e[__builtin_ctz(m)];
+    }
+#else
+    for (size_t k = 0; k < n; ++k)
+        for (unsigned m = mask; m; m &= m - 1)
+            out[k][__builtin_ctz(m)] = sg_world__box_entry(&boxes[k], &rays[__builtin_ctz(m)]);
+#endif
+}
+
 /* Worlds of up to this many models visit them in box-entry order. */
 enum { SORTED_MAX = 16 };
 
-/* Models sorted by where the ray enters their boxes (insertion sort,
- * stable): order[k] is the k-th model, entry[k] its box entry. */
-static void model_order(const sg_world *w, const sg_ray *r, size_t n, size_t *order, float *entry)
+/* Models 0..n-1 sorted by their box entries e[i * stride] (insertion
+ * sort, stable): order[k] is the k-th model, entry[k] its box entry. */
+static void sort_models(size_t n, const float *e, size_t stride, size_t *order, float *entry)
 {
     for (size_t i = 0; i < n; ++i) {
-        float e = box_entry(&w->model_bounds[i], r);
+        const float ei = e[i * stride];
         size_t j = i;
-        for (; j > 0 && entry[j - 1] > e; --j) {
+        for (; j > 0 && entry[j - 1] > ei; --j) {
             entry[j] = entry[j - 1];
             order[j] = order[j - 1];
         }
-        entry[j] = e;
+        entry[j] = ei;
         order[j] = i;
     }
+}
+
+/* The models in the order ray r enters their boxes (sort_models). */
+static void model_order(const sg_world *w, const sg_ray *r, size_t n, size_t *order, float *entry)
+{
+    float e[SORTED_MAX];
+    for (size_t i = 0; i < n; ++i)
+        e[i] = sg_world__box_entry(&w->model_bounds[i], r);
+    sort_models(n, e, 1, order, entry);
 }
 
 int sg_world_intersect(const sg_world *w, const sg_ray *ray, sg_world_hit *h, sg_ray_stats *stats)
@@ -465,9 +539,10 @@ unsigned sg_world_intersect16(const sg_world *w, const sg_ray *rays, unsigned ma
         return found;
     }
     size_t order[16][SORTED_MAX];
-    float entry[16][SORTED_MAX];
+    float entry[16][SORTED_MAX], e[SORTED_MAX][16]; /* e[i][r]: ray r's entry into model i's box */
+    sg_world__box_entry16(w->model_bounds, n, rays, mask, e);
     for (unsigned m = mask; m; m &= m - 1)
-        model_order(w, &rays[__builtin_ctz(m)], n, order[__builtin_ctz(m)], entry[__builtin_ctz(m)]);
+        sort_models(n, &e[0][__builtin_ctz(m)], 16, order[__builtin_ctz(m)], entry[__builtin_ctz(m)]);
     /* The order decides each model's tmax, and so the bits: rays are
      * traced together only with rays that visit the models in their order
      * (a block on the ground's edge splits into two groups). */

@@ -32,6 +32,15 @@ void sg_world__say(const sg_world_desc *d, sg_world_event kind, const char *fmt,
 /* The note on an envmap's non-finite texels, if it had any. */
 void sg_world__note_envmap(const sg_world_desc *d, const sg_scene_env *e, const sg_envmap *env);
 
+/* Where ray r enters box b, or INFINITY when it misses it within
+ * [r->tmin, r->tmax] (the models' order along a ray). */
+float sg_world__box_entry(const sg_aabb *b, const sg_ray *r);
+
+/* sg_world__box_entry of boxes[0..n-1] for the rays of mask (bit i:
+ * rays[i]; up to 16), bit for bit, in out[k][i]; SIMD across the rays
+ * where v16.h has it. Lanes outside mask are neither read nor written. */
+void sg_world__box_entry16(const sg_aabb *boxes, size_t n, const sg_ray *rays, unsigned mask, float (*out)[16]);
+
 /* Takes model i's bounds from its scene into model_bounds[i] and bounds. */
 void sg_world__add_bounds(sg_world *w, size_t i);
 

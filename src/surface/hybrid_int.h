@@ -67,4 +67,19 @@ static inline int sg_hybrid__triangle_sites(const uint32_t v[3], float b1, float
     return n;
 }
 
+/* The id sg_hybrid__triangle_sites puts first with max 1 (the vertex of
+ * the largest clamped weight, ties to the earlier vertex; the insertion
+ * sort's comparisons, NaN included), with selects instead of the sort's
+ * branches: a hit's dominant site (hybrid_scene.c), where the branches
+ * mispredicted. */
+static inline uint32_t sg_hybrid__dominant_site(const uint32_t v[3], float b1, float b2)
+{
+    float w[3] = {1.0f - b1 - b2, b1, b2};
+    for (int k = 0; k < 3; ++k)
+        w[k] = w[k] < 0.0f ? 0.0f : (w[k] > 1.0f ? 1.0f : w[k]);
+    const int a = w[1] > w[0];          /* the first after two vertices */
+    const float wa = a ? w[1] : w[0], wb = a ? w[0] : w[1];
+    return v[w[2] > wb && w[2] > wa ? 2 : a];
+}
+
 #endif

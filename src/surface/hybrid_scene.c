@@ -220,8 +220,7 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     hit->leaf = hh.slot;
     hit->b1 = hh.b1;
     hit->b2 = hh.b2;
-    float w; /* the dominant site: the largest weight */
-    sg_hybrid__triangle_sites(hh.vertex, hh.b1, hh.b2, &hit->splat, &w, 1);
+    hit->splat = sg_hybrid__dominant_site(hh.vertex, hh.b1, hh.b2); /* the largest weight */
     return 1;
 }
 

@@ -93,9 +93,9 @@ typedef struct entry {
 } entry;
 
 typedef struct tray {
-    float o[3], d[3];
     float tmin;
-    sg_bundle_ray br;  /* the same ray for sphere tests, with the LOD test */
+    sg_bundle_ray br;  /* the ray for sphere tests (origin o, direction d),
+                          with the LOD test                               */
     sg_tri_ray tr;
     int accept_front, accept_back;
     int cull;          /* skip nodes that face the wrong way             */
@@ -119,17 +119,18 @@ static int setup(const sg_hybrid *h, const sg_ray *ray, const sg_footprint *fp, 
         return 0;
     if (ray->dir.x == 0.0f && ray->dir.y == 0.0f && ray->dir.z == 0.0f)
         return 0;
-    r->o[0] = ray->org.x;
-    r->o[1] = ray->org.y;
-    r->o[2] = ray->org.z;
-    r->d[0] = ray->dir.x;
-    r->d[1] = ray->dir.y;
-    r->d[2] = ray->dir.z;
     r->tmin = ray->tmin;
     r->tr = sg_tri_ray_prepare(ray->org, ray->dir);
+    /* From the ray, not copied from fields just stored: an 8-byte load of
+     * two 4-byte stores stalled on store forwarding (a third of setup's
+     * samples when the tray kept its own copy of o and d). */
     sg_bundle_ray *br = &r->br;
-    memcpy(br->o, r->o, sizeof br->o);
-    memcpy(br->d, r->d, sizeof br->d);
+    br->o[0] = ray->org.x;
+    br->o[1] = ray->org.y;
+    br->o[2] = ray->org.z;
+    br->d[0] = ray->dir.x;
+    br->d[1] = ray->dir.y;
+    br->d[2] = ray->dir.z;
     br->tmin = ray->tmin;
     br->lod0 = br->lod1 = 0.0f;
     if (fp && fp->lod > 0.0f && isfinite(fp->lod) && fp->width >= 0.0f && isfinite(fp->width) &&
@@ -164,7 +165,8 @@ static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, 
     if (B->sin_cone[l] == 255)
         return NODE_OPEN;
     sg_vec3 n = sg_stree_normal(B, l);
-    float dn = n.x * r->d[0] + n.y * r->d[1] + n.z * r->d[2];
+    const float *o = r->br.o, *d = r->br.d;
+    float dn = n.x * d[0] + n.y * d[1] + n.z * d[2];
     if (!(fabsf(dn) > (float)B->sin_cone[l] * (1.0f / 255.0f) + CONE_MARGIN))
         return NODE_OPEN; /* a silhouette may cross it */
     const int front = dn < 0.0f;
@@ -179,11 +181,11 @@ static int node_point(const sg_hybrid *h, uint32_t k, const tray *r, best *bst, 
     const float cx = B->cx[l], cy = B->cy[l], cz = B->cz[l];
     const float off = (float)B->offset[l] * (1.0f / 127.0f) * R;
     /* Plane through centre + off n: t = ((c + off n - o) . n) / (d . n). */
-    float num = (cx - r->o[0]) * n.x + (cy - r->o[1]) * n.y + (cz - r->o[2]) * n.z + off;
+    float num = (cx - o[0]) * n.x + (cy - o[1]) * n.y + (cz - o[2]) * n.z + off;
     float t = num / dn;
     if (!(t >= r->tmin))
         return NODE_OPEN;
-    float px = r->o[0] + t * r->d[0] - cx, py = r->o[1] + t * r->d[1] - cy, pz = r->o[2] + t * r->d[2] - cz;
+    float px = o[0] + t * d[0] - cx, py = o[1] + t * d[1] - cy, pz = o[2] + t * d[2] - cz;
     if (!(px * px + py * py + pz * pz <= R * R))
         return NODE_OPEN; /* beside the disk: look at what is really there */
     if (sg_ray_is_self(r->ray, t, n))
@@ -233,13 +235,15 @@ static inline __attribute__((always_inline)) int take_hit(const sg_hybrid *h, co
     return 1;
 }
 
-static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const sg_tri4_hit *th,
+/* t, b1, b2, front: a triangle kernel's lanes (sg_tri4_hit, sg_tri8_hit). */
+static inline __attribute__((always_inline)) int take_hits(const sg_hybrid *h, const tray *r, const float *t,
+                                                           const float *b1, const float *b2, unsigned front,
                                                            unsigned mask, uint32_t g, best *b)
 {
     int found = 0;
     for (uint32_t l = 0; mask; ++l, mask >>= 1)
         if (mask & 1u)
-            found |= take_hit(h, r, th->t[l], th->b1[l], th->b2[l], (int)(th->front >> l & 1u), g + l, b);
+            found |= take_hit(h, r, t[l], b1[l], b2[l], (int)(front >> l & 1u), g + l, b);
     return found;
 }
 
@@ -265,7 +269,7 @@ static int test_leaf(const sg_hybrid *h, uint32_t word, const tray *r, best *bst
 #else
         unsigned mask = sg_tri_intersect4(&r->tr, &t4, (1u << n) - 1u, r->tmin, bst->t, &th);
 #endif
-        found |= take_hits(h, r, &th, mask, g, bst);
+        found |= take_hits(h, r, th.t, th.b1, th.b2, th.front, mask, g, bst);
     }
     return found;
 }
@@ -578,6 +582,8 @@ typedef struct psoa {
     _Alignas(64) float bt[PW];  /* bt[i] = bst[i].t                            */
     sg_tri_shear16 sh;          /* the rays' shears (sg_tri_ray sx, sy, sz)     */
     unsigned cull;              /* rays with r[i].cull                          */
+    unsigned alike;             /* rays that gather like the packet's first ray
+                                   (same_gather): camera rays, all of them    */
     int eye;                    /* 1: every lane of br leaves one origin        */
     int cone;                   /* 1: and its rays lie within cn                */
     sg_bundle_cone cn;          /* apex (the origin), axis, half-angle widened  */
@@ -782,12 +788,38 @@ static void test_leaf4(const sg_hybrid *h, uint32_t word, const tray *r, best *b
             }
             sg_tri4_hit th;
             unsigned hm = sg_tri_intersect4(&ri->tr, &t4, (1u << n) - 1u, ri->tmin, bst[i].t, &th);
-            take_hits(h, ri, &th, hm, g, &bst[i]);
+            take_hits(h, ri, th.t, th.b1, th.b2, th.front, hm, g, &bst[i]);
         }
     }
 }
 
 #if SG_V16_SIMD
+/* test_leaf4 for rays that all gather alike (same_gather): the leaf's
+ * triangles are gathered once and each ray tests all of them in one
+ * sg_tri_intersect8 against its own best, taking the crossings in leaf
+ * order. The kernel's far limit is the ray's best before the leaf, where
+ * test_leaf4's second four see the best after the first four: a crossing
+ * between the two is then dropped by take_hit (better()) instead of by
+ * the kernel, so the same crossings are taken, in the same order. */
+static void test_leaf8(const sg_hybrid *h, uint32_t word, const tray *r, best *bst, unsigned lanes, counters *c)
+{
+    const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
+    const sg_tri_ray *t0 = &r[__builtin_ctz(lanes)].tr;
+    c->triangles += count * (uint64_t)__builtin_popcount(lanes);
+    sg_tri8 t8;
+    for (uint32_t l = 0; l < 8; ++l) {
+        const uint32_t *v = h->tri + 3 * (size_t)(first + (l < count ? l : 0));
+        sg_tri8_gather(&t8, (int)l, t0, h->pos + 3 * (size_t)v[0], h->pos + 3 * (size_t)v[1],
+                       h->pos + 3 * (size_t)v[2]);
+    }
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int i = __builtin_ctz(m);
+        sg_tri8_hit th;
+        const unsigned hm = sg_tri_intersect8(&r[i].tr, &t8, (1u << count) - 1u, r[i].tmin, bst[i].t, &th);
+        take_hits(h, &r[i], th.t, th.b1, th.b2, th.front, hm, first, &bst[i]);
+    }
+}
+
 /* test_leaf4 across the rays: the rays that gather like the packet's first
  * (one origin and axis order: camera rays) test each triangle in one
  * sg_tri_intersect16, against their own bests, and take its crossings in
@@ -798,17 +830,18 @@ static void test_leaf16(const sg_hybrid *h, uint32_t word, const tray *r, best *
                         counters *c)
 {
     const int f = __builtin_ctz(lanes);
-    unsigned cls = 0;
-    for (unsigned m = lanes; m; m &= m - 1)
+    unsigned cls = (lanes & P->alike) == lanes ? lanes : 0;
+    for (unsigned m = cls ? 0 : lanes; m; m &= m - 1)
         if (same_gather(&r[f].tr, &r[__builtin_ctz(m)].tr))
             cls |= 1u << __builtin_ctz(m);
-    if (__builtin_popcount(cls) <= SPARSE_LANES)
-        cls = 0;
-    if (lanes & ~cls) {
-        test_leaf4(h, word, r, bst, lanes & ~cls, c);
-        for (unsigned m = lanes & ~cls; m; m &= m - 1)
-            P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
-    }
+    const unsigned few = __builtin_popcount(cls) <= SPARSE_LANES ? cls : 0u;
+    cls &= ~few;
+    if (few)
+        test_leaf8(h, word, r, bst, few, c);
+    if (lanes & ~cls & ~few)
+        test_leaf4(h, word, r, bst, lanes & ~cls & ~few, c);
+    for (unsigned m = lanes & ~cls; m; m &= m - 1)
+        P->bt[__builtin_ctz(m)] = bst[__builtin_ctz(m)].t;
     if (!cls)
         return;
     const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
@@ -982,7 +1015,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
     }
     if (lanes) {
         psoa P;
-        P.cull = 0;
+        P.cull = P.alike = 0;
         P.eye = P.cone = 0;
         const int f = __builtin_ctz(lanes);
         for (int i = 0; i < PW; ++i) {
@@ -1001,6 +1034,7 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
             P.sh.sy[i] = ri->tr.sy;
             P.sh.sz[i] = ri->tr.sz;
             P.cull |= (unsigned)(lanes >> i & 1u && ri->cull) << i;
+            P.alike |= (unsigned)(lanes >> i & 1u && same_gather(&r[f].tr, &ri->tr)) << i;
         }
 #if SG_BUNDLE_SIMD16
         packet_cone(lanes, &P);

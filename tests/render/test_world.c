@@ -1,6 +1,8 @@
 /* test_world.c — what the world makes of a scene file's models: albedo
  * means what the material says (no tint the file does not have), the up
- * axis turns a Z-up model, progress and notes reach the caller. */
+ * axis turns a Z-up model, progress and notes reach the caller; and the
+ * models' box entries of sixteen rays at once (the 4x4 blocks' model
+ * order) are the single ray's, bit for bit. */
 #include "test_support.h"
 
 #include <math.h>
@@ -10,6 +12,7 @@
 #include "io/image.h"
 #include "io/scene_file.h"
 #include "render/world.h"
+#include "render/world_int.h"
 
 /* A closed cube [-1,1]^3 as OBJ text, no colours. */
 static const char CUBE_OBJ[] =
@@ -139,12 +142,79 @@ static void test_world_progress_notes_and_up_axis(void **state)
     sg_scene_file_free(&sf);
 }
 
+/* sg_world__box_entry16 against sg_world__box_entry, lane by lane, bit
+ * for bit: random boxes and rays (from inside and outside, finite and
+ * infinite tmax), rays parallel to an axis (a direction component exactly
+ * 0 or -0, the origin inside or outside that slab), flat boxes (the
+ * ground's), and partial masks whose other lanes must stay unwritten. */
+static void test_world_box_entry16_matches_single(void **state)
+{
+    (void)state;
+    uint64_t rng = 17;
+    size_t differ = 0, entered = 0, parallel = 0, boundary = 0;
+    for (int n = 0; n < 4000; ++n) {
+        sg_vec3 lo = sg_v3(4.0f * sg_test_rand01(&rng) - 2.0f, 4.0f * sg_test_rand01(&rng) - 2.0f,
+                           4.0f * sg_test_rand01(&rng) - 2.0f);
+        sg_vec3 size = sg_v3(3.0f * sg_test_rand01(&rng), n % 5 == 0 ? 0.0f : 3.0f * sg_test_rand01(&rng),
+                             3.0f * sg_test_rand01(&rng));
+        sg_aabb b = {lo, sg_v3_add(lo, size)};
+        sg_ray rays[16];
+        sg_vec3 eye = sg_v3(8.0f * sg_test_rand01(&rng) - 4.0f, 8.0f * sg_test_rand01(&rng) - 4.0f,
+                            8.0f * sg_test_rand01(&rng) - 4.0f);
+        for (int i = 0; i < 16; ++i) {
+            sg_vec3 o = n % 2 ? eye : sg_v3(8.0f * sg_test_rand01(&rng) - 4.0f, 8.0f * sg_test_rand01(&rng) - 4.0f,
+                                           8.0f * sg_test_rand01(&rng) - 4.0f);
+            sg_vec3 at = sg_v3(lo.x + size.x * sg_test_rand01(&rng), lo.y + size.y * sg_test_rand01(&rng),
+                               lo.z + size.z * sg_test_rand01(&rng)); /* half the rays aim into the box */
+            sg_vec3 d = i % 2 ? sg_test_random_dir(&rng) : sg_v3_normalize(sg_v3_sub(at, o));
+            if (n % 3 == 0 && i % 4 == 1) /* parallel to an axis; the origin in or out of its slab */
+                d = i % 8 == 1 ? sg_v3(0.0f, d.y, d.z) : sg_v3(d.x, -0.0f, d.z);
+            if (n % 3 == 0 && i % 8 == 5) { /* and on its boundary: 0 * inf is NaN there */
+                d = sg_v3(i == 5 ? -0.0f : 0.0f, d.y, d.z);
+                o.x = n % 2 ? b.lo.x : b.hi.x;
+            }
+            rays[i] = (sg_ray){.org = o, .dir = d, .tmin = i % 7 == 3 ? 0.5f : 0.0f,
+                               .tmax = i % 5 == 2 ? 6.0f * sg_test_rand01(&rng) : INFINITY};
+        }
+        unsigned mask = n % 4 == 3 ? 1u + (unsigned)(65534.0f * sg_test_rand01(&rng)) : 0xFFFFu;
+        float out[1][16];
+        for (int i = 0; i < 16; ++i)
+            out[0][i] = -7.0f; /* must stay for lanes outside mask */
+        sg_world__box_entry16(&b, 1, rays, mask, out);
+        for (int i = 0; i < 16; ++i) {
+            if (!(mask >> i & 1u)) {
+                differ += out[0][i] != -7.0f;
+                continue;
+            }
+            const float one = sg_world__box_entry(&b, &rays[i]);
+            entered += one < INFINITY;
+            parallel += rays[i].dir.x == 0.0f || rays[i].dir.y == 0.0f;
+            boundary += rays[i].dir.x == 0.0f && (rays[i].org.x == b.lo.x || rays[i].org.x == b.hi.x) &&
+                        one < INFINITY;
+            if (memcmp(&one, &out[0][i], sizeof one) != 0) {
+                if (!differ)
+                    print_message("box %d ray %d: org (%g, %g, %g) dir (%g, %g, %g): alone %.9g, in sixteen %.9g\n",
+                                  n, i, (double)rays[i].org.x, (double)rays[i].org.y, (double)rays[i].org.z,
+                                  (double)rays[i].dir.x, (double)rays[i].dir.y, (double)rays[i].dir.z, (double)one,
+                                  (double)out[0][i]);
+                ++differ;
+            }
+        }
+    }
+    print_message("box entries: %zu entered, %zu parallel to an axis, %zu of those on a slab's boundary entered\n",
+                  entered, parallel, boundary);
+    if (differ)
+        fail_msg("%zu box entries differ between sixteen rays and one", differ);
+    assert_true(entered > 5000 && parallel > 3000 && boundary > 50);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_world_albedo_of_mesh_without_colours),
         cmocka_unit_test(test_world_albedo_of_builtins),
         cmocka_unit_test(test_world_progress_notes_and_up_axis),
+        cmocka_unit_test(test_world_box_entry16_matches_single),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

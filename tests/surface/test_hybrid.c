@@ -19,7 +19,9 @@
  *                                  convex mesh (triangle and LOD hits) meet
  *                                  nothing; inwards they meet the far side.
  *  7. hybrid::hit_sites            weights sum to 1, are the barycentrics,
- *                                  and agree on both sides of an edge.
+ *                                  and agree on both sides of an edge; the
+ *                                  scene hit's dominant site is the sorted
+ *                                  first (ties, clamping, NaN).
  *  8. hybrid::bad_meshes           0 triangles, all degenerate, index out of
  *                                  range, NaN position: INVALID_ARG naming
  *                                  the element; some degenerate: counted and
@@ -71,7 +73,9 @@
  *     rays, against the single ray's scalar test, ray by ray, with its
  *     one-eye form sg_bundle_test16_eye for rays from one origin, and
  *     sg_bundle_cone_test, a bundle against a packet's cone, against its
- *     scalar reference and against rays inside the cone.)
+ *     scalar reference and against rays inside the cone, and
+ *     sg_tri_intersect8, a leaf of eight triangles against one ray, against
+ *     its scalar reference.)
  * 17. hybrid::intersect16_matches_single  the same for 4x4 blocks of
  *                                  sixteen rays (sg_hybrid_intersect16,
  *                                  sg_scene_intersect16), with edge and
@@ -534,6 +538,25 @@ static void test_hybrid_hit_sites(void **state)
     /* max 1: the largest weight alone, renormalised. */
     assert_int_equal(sg_hybrid_hit_sites(h, &a, ia, wa, 1), 1);
     assert_float_equal(wa[0], 1.0f, 0.0f);
+    /* A scene hit's site (sg_hybrid__dominant_site, branch-free) is that
+     * first id: barycentrics on a grid of eighths (ties between two and
+     * three weights), beyond [0, 1] (clamped), random, and NaN. */
+    uint64_t rng = 5;
+    const uint32_t v3[3] = {11, 22, 33};
+    for (int n = 0; n < 3000; ++n) {
+        float b1 = n < 400 ? (float)(n % 20 - 2) / 8.0f : 3.0f * sg_test_rand01(&rng) - 1.0f;
+        float b2 = n < 400 ? (float)(n / 20 - 2) / 8.0f : 3.0f * sg_test_rand01(&rng) - 1.0f;
+        if (n % 1000 == 499)
+            b1 = NAN;
+        if (n % 1000 == 999)
+            b2 = NAN;
+        uint32_t id;
+        float wt;
+        sg_hybrid__triangle_sites(v3, b1, b2, &id, &wt, 1);
+        if (sg_hybrid__dominant_site(v3, b1, b2) != id)
+            fail_msg("b1 %g, b2 %g: dominant site %u, sorted first %u", (double)b1, (double)b2,
+                     sg_hybrid__dominant_site(v3, b1, b2), id);
+    }
     sg_hybrid_destroy(h);
     sg_mesh_free(&m);
 }
@@ -640,6 +663,23 @@ static void test_hybrid_bad_meshes(void **state)
 
 /* ---- 9: SIMD kernels against their scalar references ------------------------ */
 
+/* Case n of the triangle kernels' tests: `count` triangles in v and the
+ * ray's set-up. Every fourth case has integer vertices met by the ray
+ * down the z axis from (0, 0, 5), so that edge functions come out exactly
+ * 0 (the fallback); the others are random. */
+static sg_tri_ray kernel_case(uint64_t *rng, int n, int count, float v[][3][3])
+{
+    for (int l = 0; l < count; ++l)
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a)
+                v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(rng)) - 2.0f
+                                        : 4.0f * sg_test_rand01(rng) - 2.0f;
+    sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(rng) - 0.5f, sg_test_rand01(rng) - 0.5f, 5);
+    sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(rng) - 0.5f,
+                                                                    sg_test_rand01(rng) - 0.5f, -1));
+    return sg_tri_ray_prepare(o, d);
+}
+
 static void test_hybrid_kernels_agree(void **state)
 {
     (void)state;
@@ -649,15 +689,7 @@ static void test_hybrid_kernels_agree(void **state)
     size_t differ = 0, hits = 0;
     for (int n = 0; n < 20000; ++n) {
         float v[4][3][3];
-        for (int l = 0; l < 4; ++l)
-            for (int k = 0; k < 3; ++k)
-                for (int a = 0; a < 3; ++a)
-                    v[l][k][a] = n % 4 == 0 ? (float)(int)(4.0f * sg_test_rand01(&rng)) - 2.0f
-                                            : 4.0f * sg_test_rand01(&rng) - 2.0f;
-        sg_vec3 o = n % 4 == 0 ? sg_v3(0, 0, 5) : sg_v3(sg_test_rand01(&rng) - 0.5f, sg_test_rand01(&rng) - 0.5f, 5);
-        sg_vec3 d = n % 4 == 0 ? sg_v3(0, 0, -1) : sg_v3_normalize(sg_v3(sg_test_rand01(&rng) - 0.5f,
-                                                                        sg_test_rand01(&rng) - 0.5f, -1));
-        sg_tri_ray tr = sg_tri_ray_prepare(o, d);
+        sg_tri_ray tr = kernel_case(&rng, n, 4, v);
         sg_tri4 t4;
         for (int l = 0; l < 4; ++l)
             sg_tri4_gather(&t4, l, &tr, v[l][0], v[l][1], v[l][2]);
@@ -675,6 +707,43 @@ static void test_hybrid_kernels_agree(void **state)
     if (differ)
         fail_msg("triangles: %zu of 20000 groups of 4 differ between SIMD and scalar", differ);
     assert_true(hits > 1000); /* the comparison saw hits, not only misses */
+
+    /* A leaf of up to eight triangles against one ray (sg_tri_intersect8,
+     * the sparse packets' leaf test): random and integer triangles as
+     * above, partial leaves (valid masks) and finite far limits. */
+    size_t diff8 = 0, hits8 = 0, exact8 = 0; /* exact8: hits on the integer leaves */
+    for (int n = 0; n < 20000; ++n) {
+        float v[8][3][3];
+        sg_tri_ray tr = kernel_case(&rng, n, 8, v);
+        sg_tri8 t8;
+        for (int l = 0; l < 8; ++l)
+            sg_tri8_gather(&t8, l, &tr, v[l][0], v[l][1], v[l][2]);
+        const unsigned valid = n % 3 == 0 ? (1u << (1 + n % 8)) - 1u : 255u;
+        const float tmax = n % 5 == 4 ? 6.0f * sg_test_rand01(&rng) : INFINITY;
+        sg_tri8_hit a, b;
+        unsigned ma = sg_tri_intersect8(&tr, &t8, valid, 0.0f, tmax, &a);
+        unsigned mb = sg_tri_intersect8_scalar(&tr, &t8, valid, 0.0f, tmax, &b);
+        int same = ma == mb && (a.front & ma) == (b.front & mb), lane = -1;
+        for (int l = 0; l < 8 && same; ++l)
+            if (ma >> l & 1u && !(memcmp(&a.t[l], &b.t[l], 4) == 0 && memcmp(&a.b1[l], &b.b1[l], 4) == 0 &&
+                                  memcmp(&a.b2[l], &b.b2[l], 4) == 0))
+                same = 0, lane = l;
+        if (!same && !diff8)
+            print_message("leaf %d (valid 0x%02x, tmax %g): SIMD mask 0x%02x, scalar 0x%02x; lane %d: t %.9g / %.9g, "
+                          "b1 %.9g / %.9g, b2 %.9g / %.9g\n",
+                          n, valid, (double)tmax, ma, mb, lane, lane < 0 ? 0.0 : (double)a.t[lane],
+                          lane < 0 ? 0.0 : (double)b.t[lane], lane < 0 ? 0.0 : (double)a.b1[lane],
+                          lane < 0 ? 0.0 : (double)b.b1[lane], lane < 0 ? 0.0 : (double)a.b2[lane],
+                          lane < 0 ? 0.0 : (double)b.b2[lane]);
+        diff8 += !same;
+        hits8 += (size_t)__builtin_popcount(ma);
+        /* the integer triangles met by the axis ray: through vertices and
+         * edges, so their hits come from the exact fallback */
+        exact8 += n % 4 == 0 ? (size_t)__builtin_popcount(ma) : 0u;
+    }
+    if (diff8)
+        fail_msg("triangles: %zu of 20000 leaves of 8 differ between SIMD and scalar", diff8);
+    assert_true(hits8 > 1000 && exact8 > 100);
 
 #if SG_V16_SIMD
     /* One triangle against sixteen rays of one origin and axis order
