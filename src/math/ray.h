@@ -41,7 +41,11 @@
 enum sg_ray_flags {
     SG_RAY_ANY_FACE = 0,        /* accept the first surface crossing          */
     SG_RAY_FRONT_ONLY = 1u << 0, /* accept only crossings with dot(dir,n) < 0 */
-    SG_RAY_BACK_ONLY = 1u << 1   /* accept only crossings with dot(dir,n) > 0 */
+    SG_RAY_BACK_ONLY = 1u << 1,  /* accept only crossings with dot(dir,n) > 0 */
+    SG_RAY_PRIMARY = 1u << 2     /* a camera ray (sg_camera_ray sets it, nothing
+                                    else): the MLS surface closes a rim it
+                                    enters behind the splats facing it (mls.c
+                                    invariant 7)                              */
 };
 
 typedef struct sg_ray {

@@ -62,7 +62,7 @@ sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int he
         .dir = sg_v3_scale(d, 1.0f / len),
         .tmin = 0.0f,
         .tmax = INFINITY,
-        .flags = SG_RAY_ANY_FACE,
+        .flags = SG_RAY_ANY_FACE | SG_RAY_PRIMARY,
         .spread = 2.0f * cam->tan_half_fov / ((float)height * len),
     };
     return ray;

@@ -32,7 +32,16 @@
  *  5. where no splat on the ray has a layer key, the hits are the paper's
  *     single field's, crossing for crossing;
  *  6. a front-group crossing in the overhang of a convex keyed edge is
- *     passed (past_back_layer).
+ *     passed (past_back_layer);
+ *  7. a camera ray (SG_RAY_PRIMARY) whose first covered front-group sample
+ *     after an uncovered stretch already lies behind the splats facing it
+ *     (F < 0, their normal sum towards the ray) enters there: it grazed the
+ *     rim of a closed part, where the zero set leaves the covered region,
+ *     and without the rule it saw the part's inside (a dark pixel on a
+ *     silhouette, 0.36 in a white furnace). Other rays keep invariant 2,
+ *     so the bake's rays and the openings they escape through are as
+ *     before; the reference's camera rays carry the flag too, so the
+ *     reference and the lookup frame see one surface.
  */
 #include "surface/mls.h"
 
@@ -717,6 +726,11 @@ static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count
             sg_vec3 N;
             uint32_t id;
             F[gi] = field_group(s, first, count, mp->kernel, x, ray->org, ray->dir, gi, &W[gi], &N, &id);
+            if (gi == G_FRONT && (ray->flags & SG_RAY_PRIMARY) && W[gi] >= W_EPS && !prev_ok[gi] && F[gi] < 0.0f &&
+                sg_v3_dot(N, ray->dir) < 0.0f && j > 0) { /* invariant 7 */
+                *hit = (sg_hit){.t = t, .p = x, .n = sg_v3_normalize(N), .splat = id};
+                return 1;
+            }
             if (W[gi] < W_EPS || !prev_ok[gi] || !group_crossing(gi, prevF[gi], F[gi]) ||
                 (gi == G_BACK && front_out))
                 continue;
@@ -920,6 +934,20 @@ static int past_back_layer(const actives *a, const actives *front, actives *spli
     return x_front > BACK_LAYER_GAP * rmin && cos_layers < BACK_LAYER_EDGE_COS && entered_front < 0.5f * BACK_LAYER_GAP * rmin;
 }
 
+/* Invariant 7's entry: the hit at the covered sample t (lane l of the
+ * front group's normal sums N, which face the ray). 0, hit untouched, if
+ * no splat has a positive weight there after all. */
+static int take_rim_entry(const actives *front, sg_kernel kernel, const sg_ray *ray, float t, float N[3][8], int l,
+                          sg_hit *hit)
+{
+    const uint32_t splat = dominant_splat(front, kernel, t);
+    if (splat == SG_INVALID_ID)
+        return 0;
+    *hit = (sg_hit){.t = t, .p = sg_v3_madd(ray->org, ray->dir, t),
+                    .n = sg_v3_normalize(sg_v3(N[0][l], N[1][l], N[2][l])), .splat = splat};
+    return 1;
+}
+
 int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, const sg_mls_params *mp,
                           const sg_ray *ray, float t0, float t1, sg_hit *hit, sg_mls_carry *carry)
 {
@@ -983,6 +1011,7 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
      * ray accepting either face is still outside. */
     const int either = want == (WANT_FRONT | WANT_BACK);
     int front_out = either && in.outside;
+    const int rim_entry = (ray->flags & SG_RAY_PRIMARY) && (want & WANT_FRONT) && g[G_FRONT];
     for (int b = 0; b < k; b += 8) {
         float F8[2][8], W8[2][8], N8[2][3][8];
         for (int gi = 0; gi < 2; ++gi) {
@@ -999,6 +1028,10 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
         for (int j = b; j < end; ++j) {
             int l = j - b, best = -1;
             float best_t = INFINITY;
+            if (rim_entry && !prev[G_FRONT].ok && W8[G_FRONT][l] >= W_EPS && F8[G_FRONT][l] < 0.0f &&
+                N8[G_FRONT][0][l] * ray->dir.x + N8[G_FRONT][1][l] * ray->dir.y + N8[G_FRONT][2][l] * ray->dir.z <
+                    0.0f && take_rim_entry(g[G_FRONT], mp->kernel, ray, ts[j], N8[G_FRONT], l, hit))
+                return 1; /* invariant 7 */
             for (int gi = 0; gi < 2; ++gi) {
                 const field_prev *pv = &prev[gi];
                 float F = F8[gi][l];

@@ -41,8 +41,9 @@
  * corners (iso_build.c corner_field); 8: the ISO's self test reads the
  * surface's normal, not the one turned to the crossing's side (iso.c
  * accept); 9: MLS bridges gaps in the supports up to a sample spacing
- * (mls.c, invariant 2). */
-#define SG_VERIFY_REF_VERSION 9u
+ * (mls.c, invariant 2); 10: MLS camera rays enter a rim they meet behind
+ * the splats facing them (mls.c, invariant 7). */
+#define SG_VERIFY_REF_VERSION 10u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

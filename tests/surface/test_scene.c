@@ -480,6 +480,44 @@ static void test_mls_bridges_short_support_gap(void **state)
     }
 }
 
+/* mls.c invariant 7: a camera ray (SG_RAY_PRIMARY) that meets the supports
+ * again past a gap wider than the bridge, already behind the splats facing
+ * it, enters where they begin; the same ray without the flag passes (the
+ * bridge test above), and so does a camera ray that stays in front of the
+ * plane or comes from behind it (the normals face away from it). */
+static void test_mls_camera_ray_enters_at_rim(void **state)
+{
+    (void)state;
+    const float g = 0.7f; /* wider than the bridge (0.5) */
+    float px[2] = {-1.0f - 0.5f * g, 1.0f + 0.5f * g}, py[2] = {0, 0}, pz[2] = {0, 0};
+    float nx[2] = {0, 0}, ny[2] = {1, 1}, nz[2] = {0, 0}, r[2] = {1, 1}, ir[2] = {1, 1};
+    uint32_t id[2] = {0, 1};
+    sg_splat_soa s = {px, py, pz, nx, ny, nz, r, ir, id, NULL};
+    const sg_mls_params mp = {.kernel = SG_KERNEL_HAT, .samples = 64, .max_spacing = 0.5f};
+    /* origin y, direction y: down through the plane in the gap; above it
+     * throughout; up through it from below */
+    const float oy[3] = {0.1f, 0.1f, -0.1f}, dy[3] = {-0.05f, 0.02f, 0.05f};
+    for (int c = 0; c < 3; ++c)
+        for (int primary = 0; primary < 2; ++primary) {
+            sg_ray ray = {.org = sg_v3(-2.0f, oy[c], 0.0f), .tmin = 0, .tmax = 10,
+                          .flags = primary ? SG_RAY_PRIMARY : SG_RAY_ANY_FACE};
+            ray.dir = sg_v3_normalize(sg_v3(1.0f, dy[c], 0.0f));
+            float t0 = 0.5f / ray.dir.x, t1 = 3.5f / ray.dir.x;
+            sg_hit h;
+            int got = sg_mls_intersect_leaf(&s, 0, 2, &mp, &ray, t0, t1, &h, NULL);
+            if (c == 0 && primary) {
+                if (!got)
+                    fail_msg("a camera ray behind the plane past the gap passes through it");
+                /* The right splat's support begins at x = 0.5 g + 1 - 1; the
+                 * first covered sample lies within one sample spacing of it. */
+                assert_true(h.p.x >= 0.5f * g - 1e-4f && h.p.x <= 0.5f * g + 0.1f);
+                assert_true(sg_v3_dot(h.n, ray.dir) < 0.0f);
+                assert_int_equal(h.splat, 1);
+            } else if (got)
+                fail_msg("case %d, flags %u: a hit at x %g where the ray should pass", c, ray.flags, h.p.x);
+        }
+}
+
 /* sg_scene_hit_sites (SIMD pre-filter) gives its scalar reference's
  * result bit for bit: same count, ids and weights, at hits from random
  * rays and at points pushed off the hit so that splats sit right at the
@@ -731,6 +769,7 @@ int main(void)
         cmocka_unit_test(test_disk_corner_reflection),
         cmocka_unit_test(test_mls_simd_matches_scalar),
         cmocka_unit_test(test_mls_bridges_short_support_gap),
+        cmocka_unit_test(test_mls_camera_ray_enters_at_rim),
         cmocka_unit_test(test_mls_hit_weights_match_reference),
         cmocka_unit_test(test_disk_hit_weights_match_reference),
         cmocka_unit_test(test_mls_intersect4_matches_single),
