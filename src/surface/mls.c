@@ -727,7 +727,10 @@ static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count
             uint32_t id;
             F[gi] = field_group(s, first, count, mp->kernel, x, ray->org, ray->dir, gi, &W[gi], &N, &id);
             if (gi == G_FRONT && (ray->flags & SG_RAY_PRIMARY) && W[gi] >= W_EPS && !prev_ok[gi] && F[gi] < 0.0f &&
-                sg_v3_dot(N, ray->dir) < 0.0f && j > 0) { /* invariant 7 */
+                sg_v3_dot(N, ray->dir) < 0.0f && j > 0) {
+                /* invariant 7; not at j = 0: this path carries nothing in
+                 * from the previous leaf, so its first sample has no
+                 * predecessor whatever the ray met before */
                 *hit = (sg_hit){.t = t, .p = x, .n = sg_v3_normalize(N), .splat = id};
                 return 1;
             }

@@ -657,17 +657,19 @@ static void test_iso_intersect4_matches_single_lod(void **state)
     intersect4_matches_single(8.0f);
 }
 
-/* Four rays at once against one at a time on the bunny's ISO (30k
- * points, concave folds, thin ears) from 400 random cameras, outside and
- * inside its box, with and without level of detail: quads of neighbouring
- * pixels and quads whose rays lie up to 16 pixels apart (their lanes
- * leave the shared traversal at different cells), rays that miss and
- * graze the silhouette, every face flag. Each ray must get its hit alone,
- * bit for bit, and the normal kernel the traversal uses
+/* Packets of `side` x `side` rays (4: sg_iso_intersect4's 2 x 2 quads,
+ * 16: sg_iso_intersect16's 4 x 4 blocks, row-major as the viewer's)
+ * against one ray at a time on the bunny's ISO (30k points, concave
+ * folds, thin ears) from 400 random cameras, outside and inside its box,
+ * level of detail 0 and 1 pixel, every face flag: packets of neighbouring
+ * pixels and packets whose rays lie up to max_step pixels apart (their
+ * lanes leave the shared traversal at different cells), rays that miss
+ * and graze the silhouette, full and partial masks. Each ray must get its
+ * hit alone, bit for bit, and the normal kernel the traversal uses
  * (sg_iso_leaf_normal) must equal its scalar reference at each hit. */
-static void test_iso_intersect4_matches_single_bunny(void **state)
+static void packets_match_single_bunny(int side, int max_step, int packets, uint64_t rng)
 {
-    (void)state;
+    const int width = side * side;
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"bunny\",\"points\":30000}]}");
     sg_iso *iso = build_iso(sg_scene_points(sg_world_scene(w, 0)), 0);
     sg_iso_info info;
@@ -675,8 +677,8 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
     sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
     float R = 0.5f * sg_v3_length(sg_v3_sub(info.bounds.hi, info.bounds.lo));
     const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
+    const unsigned full = (1u << width) - 1u;
     const int n = 64;
-    uint64_t rng = 11;
     int checked = 0, hits = 0, diverged = 0;
     char where[128];
     for (int cam = 0; cam < 400; ++cam) {
@@ -685,30 +687,32 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
         sg_vec3 eye = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
         sg_vec3 look = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
         uint32_t fl = flags[cam % 3];
-        int step = cam % 4 == 3 ? 1 + (int)(16.0f * sg_test_rand01(&rng)) : 1;
-        for (int q = 0; q < 16; ++q) {
-            int x = (int)((float)(n - step) * sg_test_rand01(&rng)), y = (int)((float)(n - step) * sg_test_rand01(&rng));
-            sg_ray rays[4];
-            for (int r = 0; r < 4; ++r) {
-                rays[r] = camera_ray(eye, look, n, x + (r & 1) * step, y + (r >> 1) * step);
+        int step = cam % 4 == 3 ? 1 + (int)((float)max_step * sg_test_rand01(&rng)) : 1;
+        for (int q = 0; q < packets; ++q) {
+            int x = (int)((float)(n - (side - 1) * step) * sg_test_rand01(&rng));
+            int y = (int)((float)(n - (side - 1) * step) * sg_test_rand01(&rng));
+            sg_ray rays[16];
+            for (int r = 0; r < width; ++r) {
+                rays[r] = camera_ray(eye, look, n, x + (r % side) * step, y + (r / side) * step);
                 rays[r].flags = fl;
                 rays[r].spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)n;
             }
-            unsigned mask = q % 5 == 4 ? 0xDu : 0xFu;
-            sg_hit four[4];
-            memset(four, 0x5A, sizeof four);
-            unsigned got = sg_iso_intersect4(iso, rays, mask, four, NULL);
-            snprintf(where, sizeof where, "camera %d (eye %g %g %g) pixel (%d, %d) step %d", cam, (double)eye.x,
+            unsigned mask = q % 5 == 4 ? (unsigned)(sg_test_rand01(&rng) * (float)(full + 1u)) & full : full;
+            sg_hit got_hits[16];
+            memset(got_hits, 0x5A, sizeof got_hits);
+            unsigned got = side == 2 ? sg_iso_intersect4(iso, rays, mask, got_hits, NULL)
+                                     : sg_iso_intersect16(iso, rays, mask, got_hits, NULL);
+            snprintf(where, sizeof where, "camera %d (eye %g %g %g) packet (%d, %d) step %d", cam, (double)eye.x,
                      (double)eye.y, (double)eye.z, x, y, step);
-            unsigned alone = check_packet(iso, 4, rays, mask, got, four, where, &checked, &hits);
-            for (int r = 0; r < 4; ++r) {
+            unsigned alone = check_packet(iso, width, rays, mask, got, got_hits, where, &checked, &hits);
+            for (int r = 0; r < width; ++r) {
                 if (!(alone >> r & 1u))
                     continue;
                 /* the traversal's normal kernel equals its scalar reference */
                 sg_vec3 uvw = sg_v3(sg_test_rand01(&rng), sg_test_rand01(&rng), sg_test_rand01(&rng));
                 if (q % 4 == 0) /* the box's faces and corners */
                     uvw = sg_v3((float)(q & 1), (float)(q >> 1 & 1), 0.0f);
-                uint32_t leaf = four[r].leaf;
+                uint32_t leaf = got_hits[r].leaf;
                 sg_vec3 na = sg_iso_leaf_normal(iso, leaf, uvw), nb = sg_iso_leaf_normal_reference(iso, leaf, uvw);
                 if (memcmp(&na, &nb, sizeof na))
                     fail_msg("leaf %u at (%.9g %.9g %.9g): normal %.9g %.9g %.9g, reference %.9g %.9g %.9g", leaf,
@@ -718,10 +722,17 @@ static void test_iso_intersect4_matches_single_bunny(void **state)
             diverged += alone != 0 && alone != mask;
         }
     }
-    printf("intersect4 on the bunny: %d rays checked, %d hits, %d quads partly hit\n", checked, hits, diverged);
+    printf("intersect%d on the bunny: %d rays checked, %d hits, %d packets partly hit\n", width, checked, hits,
+           diverged);
     assert_true(hits > checked / 5 && hits < checked * 9 / 10 && diverged > 100);
     sg_iso_destroy(iso);
     sg_world_destroy(w);
+}
+
+static void test_iso_intersect4_matches_single_bunny(void **state)
+{
+    (void)state;
+    packets_match_single_bunny(2, 16, 16, 11);
 }
 
 /* Sixteen rays at once (4 x 4 blocks, row-major as the viewer's) get the
@@ -784,55 +795,10 @@ static void test_iso_intersect16_matches_single_lod(void **state)
     intersect16_matches_single(8.0f);
 }
 
-/* Sixteen rays at once against one at a time on the bunny's ISO from 400
- * random cameras, outside and inside its box, level of detail 0 and 1
- * pixel, every face flag: 4 x 4 blocks of neighbouring pixels and blocks
- * whose rays lie up to 16 pixels apart (lanes leave the shared traversal
- * at different cells), misses and silhouettes, full and partial masks. */
 static void test_iso_intersect16_matches_single_bunny(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"bunny\",\"points\":30000}]}");
-    sg_iso *iso = build_iso(sg_scene_points(sg_world_scene(w, 0)), 0);
-    sg_iso_info info;
-    sg_iso_get_info(iso, &info);
-    sg_vec3 c = sg_v3_scale(sg_v3_add(info.bounds.lo, info.bounds.hi), 0.5f);
-    float R = 0.5f * sg_v3_length(sg_v3_sub(info.bounds.hi, info.bounds.lo));
-    const uint32_t flags[3] = {SG_RAY_ANY_FACE, SG_RAY_FRONT_ONLY, SG_RAY_BACK_ONLY};
-    const int n = 64;
-    uint64_t rng = 13;
-    int checked = 0, hits = 0, diverged = 0;
-    char where[128];
-    for (int cam = 0; cam < 400; ++cam) {
-        float lod_px = cam % 2 ? 1.0f : 0.0f;
-        sg_iso_set_lod(iso, lod_px);
-        sg_vec3 eye = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), R * (0.2f + 2.8f * sg_test_rand01(&rng))));
-        sg_vec3 look = sg_v3_add(c, sg_v3_scale(sg_test_random_dir(&rng), 0.5f * R * sg_test_rand01(&rng)));
-        uint32_t fl = flags[cam % 3];
-        int step = cam % 4 == 3 ? 1 + (int)(5.0f * sg_test_rand01(&rng)) : 1;
-        for (int q = 0; q < 8; ++q) {
-            int x = (int)((float)(n - 3 * step) * sg_test_rand01(&rng));
-            int y = (int)((float)(n - 3 * step) * sg_test_rand01(&rng));
-            sg_ray rays[16];
-            for (int r = 0; r < 16; ++r) {
-                rays[r] = camera_ray(eye, look, n, x + (r & 3) * step, y + (r >> 2) * step);
-                rays[r].flags = fl;
-                rays[r].spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)n;
-            }
-            unsigned mask = q % 5 == 4 ? (unsigned)(sg_test_rand01(&rng) * 65536.0f) & 0xFFFFu : 0xFFFFu;
-            sg_hit sixteen[16];
-            memset(sixteen, 0x5A, sizeof sixteen);
-            unsigned got = sg_iso_intersect16(iso, rays, mask, sixteen, NULL);
-            snprintf(where, sizeof where, "camera %d (eye %g %g %g) block (%d, %d) step %d", cam, (double)eye.x,
-                     (double)eye.y, (double)eye.z, x, y, step);
-            unsigned alone = check_packet(iso, 16, rays, mask, got, sixteen, where, &checked, &hits);
-            diverged += alone != 0 && alone != mask;
-        }
-    }
-    printf("intersect16 on the bunny: %d rays checked, %d hits, %d blocks partly hit\n", checked, hits, diverged);
-    assert_true(hits > checked / 5 && hits < checked * 9 / 10 && diverged > 100);
-    sg_iso_destroy(iso);
-    sg_world_destroy(w);
+    packets_match_single_bunny(4, 5, 8, 13);
 }
 
 /* 8b. Level of detail (iso.h) against full detail on a sampled sphere seen
