@@ -42,6 +42,12 @@ sg_status sg_camera_look_at(sg_vec3 eye, sg_vec3 look, sg_vec3 up, float vfov_de
  * pixel's angular width (its footprint for levels of detail). */
 sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int height);
 
+/* The camera rays through the centres of the 4 x 4 pixels from (x, y)
+ * (ray q: pixel (x + q % 4, y + q / 4)), each sg_camera_ray's bits,
+ * written in place. Returns the mask of those inside the image (bit q:
+ * rays[q] written; the others are left as they are). */
+unsigned sg_camera_block16(const sg_camera *cam, int x, int y, int width, int height, sg_ray rays[16]);
+
 /* A camera looking along view_dir (need not be unit) at the centre of
  * bounds, far enough back that the sphere around the box fits inside both
  * the vertical and the horizontal field of view, scaled by margin (>= 1

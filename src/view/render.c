@@ -49,14 +49,7 @@ sg_status sg_view_render(const sg_bake *b, const sg_world *w, const sg_bake_fram
             for (int x = x0; x < x0 + TILE && x < d.width; x += 4) {
                 sg_ray rays[16];
                 sg_world_hit h[16];
-                unsigned mask = 0;
-                for (int q = 0; q < 16; ++q) {
-                    int px = x + (q & 3), py = y + (q >> 2);
-                    if (px >= d.width || py >= d.height)
-                        continue;
-                    rays[q] = sg_camera_ray(&d.camera, (float)px + 0.5f, (float)py + 0.5f, d.width, d.height);
-                    mask |= 1u << q;
-                }
+                unsigned mask = sg_camera_block16(&d.camera, x, y, d.width, d.height, rays);
                 unsigned hit = sg_world_intersect16(w, rays, mask, h, NULL);
                 sg_vec3 wo[16], Lh[16];
                 for (unsigned m = hit; m; m &= m - 1)

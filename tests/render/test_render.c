@@ -4,6 +4,10 @@
  *                                  the same image bits and counters.
  *  2. render::camera_centre_ray    the ray through the centre pixel is the
  *                                  view direction; framing keeps the box centre.
+ *     render::camera_block16       a 4x4 block's rays are sg_camera_ray's
+ *                                  bit for bit (every field), the mask marks
+ *                                  the pixels inside the image, and rays
+ *                                  outside it are not written.
  *  3. render::exr_roundtrip        float (exact) and half, ZIP and none.
  *  4. render::png_written          PNG decodes to the sRGB OETF values; the
  *                                  temporary file is gone.
@@ -182,6 +186,47 @@ static int count_entries(const char *dir, const char *prefix)
             n++;
     closedir(d);
     return n;
+}
+
+static void test_render_camera_block16(void **state)
+{
+    (void)state;
+    sg_error err;
+    sg_camera cam;
+    const int w = 37, h = 22; /* not multiples of 4: the last blocks are partial */
+    assert_int_equal(sg_camera_look_at(sg_v3(0.3f, 1.7f, 4.1f), sg_v3(-0.2f, 0.4f, 0.1f), sg_v3(0, 1, 0), 53.0f,
+                                       (float)w / (float)h, &cam, &err),
+                     SG_OK);
+    int blocks = 0;
+    for (int y = -4; y < h + 4; y += 3) /* steps of 3: blocks that overlap every edge */
+        for (int x = -4; x < w + 4; x += 3) {
+            sg_ray rays[16];
+            memset(rays, 0xA5, sizeof rays); /* a pattern no ray writes */
+            unsigned mask = sg_camera_block16(&cam, x, y, w, h, rays);
+            for (int q = 0; q < 16; ++q) {
+                int px = x + (q & 3), py = y + (q >> 2);
+                int inside = px >= 0 && py >= 0 && px < w && py < h;
+                if ((int)(mask >> q & 1u) != inside)
+                    fail_msg("block (%d, %d), ray %d: mask bit %u, pixel inside %d", x, y, q, mask >> q & 1u, inside);
+                sg_ray want;
+                if (inside)
+                    want = sg_camera_ray(&cam, (float)px + 0.5f, (float)py + 0.5f, w, h);
+                else
+                    memset(&want, 0xA5, sizeof want);
+                /* field by field: the struct's padding is not part of the ray */
+                const float got_f[12] = {rays[q].org.x,    rays[q].org.y,    rays[q].org.z,  rays[q].dir.x,
+                                         rays[q].dir.y,    rays[q].dir.z,    rays[q].tmin,   rays[q].tmax,
+                                         rays[q].self_n.x, rays[q].self_n.y, rays[q].self_r, rays[q].spread};
+                const float want_f[12] = {want.org.x,    want.org.y,    want.org.z,  want.dir.x,
+                                          want.dir.y,    want.dir.z,    want.tmin,   want.tmax,
+                                          want.self_n.x, want.self_n.y, want.self_r, want.spread};
+                if (memcmp(got_f, want_f, sizeof got_f) != 0 || rays[q].flags != want.flags ||
+                    memcmp(&rays[q].self_n.z, &want.self_n.z, sizeof(float)) != 0)
+                    fail_msg("block (%d, %d), ray %d (pixel %d, %d): not sg_camera_ray's bits", x, y, q, px, py);
+            }
+            blocks += mask != 0;
+        }
+    assert_true(blocks > 50);
 }
 
 static void fill_test_image(sg_image *img, int w, int h)
@@ -464,6 +509,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_render_threads_identical),
         cmocka_unit_test(test_render_camera_centre_ray),
+        cmocka_unit_test(test_render_camera_block16),
         cmocka_unit_test(test_render_exr_roundtrip),
         cmocka_unit_test(test_render_png_written),
         cmocka_unit_test(test_render_missing_folder),
