@@ -14,7 +14,13 @@
  *   hybrid-stack   full detail (no footprint), ordered-stack traversal;
  *   hybrid-heap    full detail, Ye's heap (dragon only: a second build);
  *   hybrid lod L   the stack traversal with the pinhole footprint and
- *                  threshold L pixels, for every L of --lods.
+ *                  threshold L pixels, for every L of --lods;
+ *   ... x16        (--packets) the stack and lod rows again through
+ *                  sg_hybrid_intersect16 on 4x4 pixel blocks, as the
+ *                  viewer traces camera rays, each alternating with
+ *                  Embree's 16-ray packets (rtcIntersect16 on the same
+ *                  blocks), the faster of Embree's two on coherent rays;
+ *                  the frame must equal the single rays' pixel for pixel.
  * Every splatgi frame alternates with an Embree frame, so each row carries
  * its own Embree time measured under the same machine load, and the ratio
  * is fps / that Embree fps. Frames: one warm-up, then the best of N
@@ -81,6 +87,10 @@ static const char usage[] =
     "  --no-heap         skip the heap traversal rows\n"
     "  --embree-packets  also time Embree's packet traversal (rtcIntersect16/8 on\n"
     "                    4x4 / 4x2 pixel blocks) beside each full-detail row\n"
+    "  --packets         after each hybrid-stack and lod row, a row ('x16') of the same\n"
+    "                    frames through sg_hybrid_intersect16 on 4x4 pixel blocks (the\n"
+    "                    viewer's camera rays), alternating with Embree's 16-ray packets\n"
+    "                    (its ratio is to them); its pixels must equal the single rays'\n"
     "  --quick           smoke test: dragon_vrip_res3 (45k triangles), split 2, 2 frames\n"
     "  --csv PATH        write the rows as CSV\n"
     "  --md PATH         write the tables as markdown\n"
@@ -93,7 +103,7 @@ typedef struct options {
     float lods[MAX_LODS];
     int lod_count;
     int views[2];
-    int frames, threads, leaf_max, heap, quick, embree_packets;
+    int frames, threads, leaf_max, heap, quick, embree_packets, packets;
     const char *csv, *md, *png_dir;
 } options;
 
@@ -167,6 +177,9 @@ static int parse_options(int argc, char **argv, options *o)
             continue;
         } else if (strcmp(a, "--embree-packets") == 0) {
             o->embree_packets = 1;
+            continue;
+        } else if (strcmp(a, "--packets") == 0) {
+            o->packets = 1;
             continue;
         } else if (strcmp(a, "--no-heap") == 0) {
             o->heap = 0;
@@ -382,9 +395,47 @@ typedef struct frame_stats {
     sg_hybrid_stats st;
 } frame_stats;
 
-/* The splatgi frame: bench/embree_tris.c's loop with sg_hybrid_intersect. */
+static void shade(const sg_ray *r, int hit, const sg_hybrid_hit *h, float rgb[3])
+{
+    if (hit) {
+        float k = 0.8f * (0.15f + 0.85f * fabsf(sg_v3_dot(h->ns, r->dir)));
+        rgb[0] = rgb[1] = rgb[2] = k;
+    } else {
+        rgb[0] = 0.1f;
+        rgb[1] = 0.1f;
+        rgb[2] = 0.12f;
+    }
+}
+
+/* The rows of a tile's 4x4 blocks through sg_hybrid_intersect16, as the
+ * viewer traces camera rays (tiles are whole blocks: 512 = 32 x 16). */
+static void hybrid_blocks(const sg_hybrid *h, const sg_camera *cam, const sg_footprint *fp, bench_rect b,
+                          sg_image *img, uint32_t *tri_ids, sg_hybrid_stats *stats)
+{
+    for (int by = b.y0; by < b.y1; by += 4)
+        for (int bx = b.x0; bx < b.x1; bx += 4) {
+            sg_ray rays[16];
+            sg_footprint fps[16];
+            sg_hybrid_hit hits[16];
+            const unsigned mask = sg_camera_block16(cam, bx, by, IMAGE_SIZE, IMAGE_SIZE, rays);
+            for (int i = 0; fp && i < 16; i++)
+                fps[i] = *fp;
+            unsigned hit = sg_hybrid_intersect16(h, rays, mask, fp ? fps : NULL, hits, stats);
+            for (int i = 0; i < 16; i++) {
+                if (!(mask >> i & 1u))
+                    continue;
+                size_t pix = (size_t)(by + (i >> 2)) * IMAGE_SIZE + (size_t)(bx + (i & 3));
+                shade(&rays[i], (int)(hit >> i & 1u), &hits[i], img->data + 3 * pix);
+                if (tri_ids)
+                    tri_ids[pix] = hits[i].triangle;
+            }
+        }
+}
+
+/* The splatgi frame: bench/embree_tris.c's loop with sg_hybrid_intersect
+ * (packets: 4x4 blocks through sg_hybrid_intersect16). */
 static sg_status hybrid_frame(const sg_hybrid *h, const sg_camera *cam, const sg_footprint *fp, int threads,
-                              sg_image *out, uint32_t *tri_ids, frame_stats *fs, sg_error *err)
+                              int packets, sg_image *out, uint32_t *tri_ids, frame_stats *fs, sg_error *err)
 {
     sg_image img = {0};
     sg_status st = sg_image_alloc(&img, IMAGE_SIZE, IMAGE_SIZE, err);
@@ -399,20 +450,17 @@ static sg_status hybrid_frame(const sg_hybrid *h, const sg_camera *cam, const sg
 #pragma omp for schedule(dynamic, 1)
         for (int t = 0; t < tiles.count; t++) {
             const bench_rect b = bench_tile(&tiles, t);
+            if (packets) {
+                hybrid_blocks(h, cam, fp, b, &img, tri_ids, &local);
+                continue;
+            }
             for (int y = b.y0; y < b.y1; y++)
                 for (int x = b.x0; x < b.x1; x++) {
                     sg_ray r = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, IMAGE_SIZE, IMAGE_SIZE);
                     size_t pix = (size_t)y * IMAGE_SIZE + (size_t)x;
                     sg_hybrid_hit hit;
-                    float *rgb = img.data + 3 * pix;
-                    if (sg_hybrid_intersect(h, &r, fp, &hit, &local)) {
-                        float k = 0.8f * (0.15f + 0.85f * fabsf(sg_v3_dot(hit.ns, r.dir)));
-                        rgb[0] = rgb[1] = rgb[2] = k;
-                    } else {
-                        rgb[0] = 0.1f;
-                        rgb[1] = 0.1f;
-                        rgb[2] = 0.12f;
-                    }
+                    int found = sg_hybrid_intersect(h, &r, fp, &hit, &local);
+                    shade(&r, found, &hit, img.data + 3 * pix);
                     if (tri_ids)
                         tri_ids[pix] = hit.triangle;
                 }
@@ -437,12 +485,16 @@ typedef struct scene_ctx {
 } scene_ctx;
 
 /* One splatgi configuration on one view, alternating with Embree frames.
- * keep (may be NULL) receives splatgi's last frame. */
+ * keep (may be NULL) receives splatgi's last frame. single (packet rows
+ * only): the same configuration's single-ray frame, which the packets'
+ * first frame must equal pixel for pixel (sg_hybrid_intersect16 promises
+ * the single rays' bits). */
 static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *method, const sg_camera *cam,
                          const char *view, float lod, const sg_image *full, uint32_t *ids_a, uint32_t *ids_b,
-                         sg_image *keep, sg_error *err)
+                         const sg_image *single, sg_image *keep, sg_error *err)
 {
     const options *o = sc->o;
+    const int packets = single != NULL;
     sg_footprint fp = sg_footprint_pinhole(cam->tan_half_fov, IMAGE_SIZE, lod);
     const sg_footprint *fpp = lod >= 0.0f ? &fp : NULL;
     frame_stats best = {0};
@@ -453,22 +505,36 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
     for (int f = 0; f <= o->frames; f++) {
         frame_stats fs;
         sg_image_free(&img);
-        sg_status st = hybrid_frame(h, cam, fpp, o->threads, &img, f == 0 ? ids_a : NULL, &fs, err);
+        sg_status st = hybrid_frame(h, cam, fpp, o->threads, packets, &img, f == 0 ? ids_a : NULL, &fs, err);
         if (st != SG_OK)
             return st;
+        if (packets && f == 0) {
+            size_t differ = 0, n = 3 * (size_t)IMAGE_SIZE * IMAGE_SIZE;
+            for (size_t i = 0; i < n; ++i)
+                differ += img.data[i] != single->data[i];
+            if (differ) {
+                sg_image_free(&img);
+                return sg_error_set(err, SG_ERR_INVALID_ARG,
+                                    "%s %s: %zu channel values of the 4x4 packets' frame differ from the single "
+                                    "rays'", view, method, differ);
+            }
+        }
         if (f > 0 && (best.seconds == 0.0 || fs.seconds < best.seconds))
             best = fs;
         sg_image eimg = {0};
         embree_tris_stats es;
-        st = embree_tris_frame(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &eimg, f == 0 ? ids_b : NULL, NULL,
-                               &es, err);
+        if (packets)
+            st = embree_tris_frame_packets(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &eimg, &pwidth, &es, err);
+        else
+            st = embree_tris_frame(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &eimg, f == 0 ? ids_b : NULL,
+                                   NULL, &es, err);
         if (st != SG_OK) {
             sg_image_free(&img);
             return st;
         }
         if (f > 0 && (ebest.seconds == 0.0 || es.seconds < ebest.seconds))
             ebest = es;
-        if (o->embree_packets && lod < 0.0f) {
+        if (o->embree_packets && lod < 0.0f && !packets) {
             sg_image pimg = {0};
             st = embree_tris_frame_packets(sc->e, cam, IMAGE_SIZE, IMAGE_SIZE, o->threads, &pimg, &pwidth, &es,
                                            err);
@@ -539,9 +605,9 @@ static sg_status measure(const scene_ctx *sc, const sg_hybrid *h, const char *me
         r->agree = (double)same_hit / (double)n;
         r->same_tri = (double)same_tri / (double)n;
     }
-    printf("  %-8s %-7s %-12s: %6.2f fps %6.3f Mrays/s cpu %6.1f ms | Embree %6.2f fps cpu %6.1f ms | ratio %.3f "
+    printf("  %-8s %-7s %-16s: %6.2f fps %6.3f Mrays/s cpu %6.1f ms | Embree%s %6.2f fps cpu %6.1f ms | ratio %.3f "
            "cpu ratio %.3f | pops %.1f tris %.1f lodhit %.3f hit %.3f",
-           r->scene, view, method, r->fps, r->mrays, r->cpu_ms, r->embree_fps, r->embree_cpu_ms, r->ratio,
+           r->scene, view, method, r->fps, r->mrays, r->cpu_ms, packets ? " x16" : "", r->embree_fps, r->embree_cpu_ms, r->ratio,
            r->cpu_ratio, r->pops, r->tris, r->lod_hit, r->hit);
     if (lod >= 0.0f)
         printf(" (lod %g)", (double)lod);
@@ -629,19 +695,29 @@ static int run_scene(const char *label, const sg_mesh *mesh, const sg_camera cam
         if (!o->views[v])
             continue;
         sg_image full = {0}, img = {0};
-        if (measure(&sc, hs, "hybrid-stack", &cams[v], view_names[v], -1.0f, NULL, ids_a, ids_b, &full, &err) !=
-            SG_OK) {
+        if (measure(&sc, hs, "hybrid-stack", &cams[v], view_names[v], -1.0f, NULL, ids_a, ids_b, NULL, &full,
+                    &err) != SG_OK) {
             status = fail("%s", err.message);
             break;
         }
-        if (hh && measure(&sc, hh, "hybrid-heap", &cams[v], view_names[v], -1.0f, NULL, ids_a, ids_b, NULL, &err) !=
-                      SG_OK) {
+        if (o->packets && measure(&sc, hs, "hybrid-stack x16", &cams[v], view_names[v], -1.0f, NULL, NULL, NULL,
+                                  &full, NULL, &err) != SG_OK) {
+            status = fail("%s", err.message);
+            break;
+        }
+        if (hh && measure(&sc, hh, "hybrid-heap", &cams[v], view_names[v], -1.0f, NULL, ids_a, ids_b, NULL, NULL,
+                          &err) != SG_OK) {
             status = fail("%s", err.message);
             break;
         }
         for (int li = 0; li < o->lod_count && status == 0; li++) {
-            if (measure(&sc, hs, "hybrid-lod", &cams[v], view_names[v], o->lods[li], &full, NULL, NULL, &img,
+            if (measure(&sc, hs, "hybrid-lod", &cams[v], view_names[v], o->lods[li], &full, NULL, NULL, NULL, &img,
                         &err) != SG_OK) {
+                status = fail("%s", err.message);
+                break;
+            }
+            if (o->packets && measure(&sc, hs, "hybrid-lod x16", &cams[v], view_names[v], o->lods[li], &full, NULL,
+                                      NULL, &img, NULL, &err) != SG_OK) {
                 status = fail("%s", err.message);
                 break;
             }
@@ -720,6 +796,13 @@ static void write_md(FILE *f, const void *ctx)
                 rep.embree_mib[s], r->memory_mib / rep.embree_mib[s], r->fps, r->mrays, r->cpu_ms, r->embree_fps,
                 r->ratio, r->pops, r->tris, r->lod_hit, rel, agree, same);
     }
+    for (int i = 0; i < nrows; i++)
+        if (strstr(rows[i].method, "x16")) {
+            fprintf(f, "\nRows *x16* (`--packets`): 4x4 blocks through sg_hybrid_intersect16 (pixels equal to the "
+                       "single rays'; pops and sphere tests counted once a block), and their Embree fps is "
+                       "rtcIntersect16's on the same blocks.\n");
+            break;
+        }
     int packets = 0;
     for (int i = 0; i < nrows; i++)
         packets += rows[i].packet_fps > 0.0;
