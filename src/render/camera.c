@@ -9,6 +9,8 @@
 
 #include <math.h>
 
+#include "math/v16.h"
+
 #define PI_F 3.14159265358979323846f
 
 sg_status sg_camera_look_at(sg_vec3 eye, sg_vec3 look, sg_vec3 up, float vfov_deg, float aspect,
@@ -78,8 +80,57 @@ sg_ray sg_camera_ray(const sg_camera *cam, float px, float py, int width, int he
     return ray;
 }
 
+#if SG_V16_SIMD
+/* A whole block across 16 lanes: camera_ray's operations in its order
+ * (no contraction: the library is built as ISO C), so the same bits. */
+static void camera_block16_simd(const sg_camera *cam, int x, int y, int width, int height, sg_ray rays[16])
+{
+    _Alignas(64) float fx[16], fy[16];
+    for (int q = 0; q < 16; ++q) {
+        fx[q] = (float)(x + (q & 3)) + 0.5f;
+        fy[q] = (float)(y + (q >> 2)) + 0.5f;
+    }
+    const sg_v16 two = sg_v16_set1(2.0f), one = sg_v16_set1(1.0f);
+    const sg_v16 sx = sg_v16_sub(sg_v16_div(sg_v16_mul(two, sg_v16_load(fx)), sg_v16_set1((float)width)), one);
+    const sg_v16 sy = sg_v16_sub(one, sg_v16_div(sg_v16_mul(two, sg_v16_load(fy)), sg_v16_set1((float)height)));
+    const sg_v16 kx = sg_v16_mul(sg_v16_mul(sx, sg_v16_set1(cam->tan_half_fov)), sg_v16_set1(cam->aspect));
+    const sg_v16 ky = sg_v16_mul(sy, sg_v16_set1(cam->tan_half_fov));
+    const float *f = &cam->forward.x, *r = &cam->right.x, *u = &cam->up.x;
+    sg_v16 d[3];
+    for (int c = 0; c < 3; ++c) {
+        d[c] = sg_v16_add(sg_v16_set1(f[c]), sg_v16_mul(sg_v16_set1(r[c]), kx));
+        d[c] = sg_v16_add(d[c], sg_v16_mul(sg_v16_set1(u[c]), ky));
+    }
+    const sg_v16 len = sg_v16_sqrt(
+        sg_v16_add(sg_v16_add(sg_v16_mul(d[0], d[0]), sg_v16_mul(d[1], d[1])), sg_v16_mul(d[2], d[2])));
+    const sg_v16 inv = sg_v16_div(one, len);
+    _Alignas(64) float dx[16], dy[16], dz[16], sp[16];
+    sg_v16_store(dx, sg_v16_mul(d[0], inv));
+    sg_v16_store(dy, sg_v16_mul(d[1], inv));
+    sg_v16_store(dz, sg_v16_mul(d[2], inv));
+    sg_v16_store(sp, sg_v16_div(sg_v16_set1(2.0f * cam->tan_half_fov), sg_v16_mul(sg_v16_set1((float)height), len)));
+    for (int q = 0; q < 16; ++q) {
+        sg_ray *ray = &rays[q];
+        ray->org = cam->eye;
+        ray->dir = sg_v3(dx[q], dy[q], dz[q]);
+        ray->tmin = 0.0f;
+        ray->tmax = INFINITY;
+        ray->flags = SG_RAY_ANY_FACE | SG_RAY_PRIMARY;
+        ray->self_n = sg_v3(0.0f, 0.0f, 0.0f);
+        ray->self_r = 0.0f;
+        ray->spread = sp[q];
+    }
+}
+#endif
+
 unsigned sg_camera_block16(const sg_camera *cam, int x, int y, int width, int height, sg_ray rays[16])
 {
+#if SG_V16_SIMD
+    if (x >= 0 && y >= 0 && x + 4 <= width && y + 4 <= height) {
+        camera_block16_simd(cam, x, y, width, height, rays);
+        return 0xFFFFu;
+    }
+#endif
     unsigned mask = 0;
     for (int q = 0; q < 16; ++q) {
         int px = x + (q & 3), py = y + (q >> 2);
