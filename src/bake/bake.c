@@ -504,7 +504,10 @@ void sg_bake_lookup16(const sg_bake *b, const sg_world *w, const sg_world_hit *h
         const float *E = b->E[h[r].model];
         for (int j = 0; j < n[r]; ++j) {
             const uint32_t i = ids[r][j];
+            /* both ends: a 48-byte record straddles two lines at one
+             * offset in four */
             __builtin_prefetch(E + SG_BAKE_SPLAT_FLOATS * (size_t)i);
+            __builtin_prefetch(E + SG_BAKE_SPLAT_FLOATS * (size_t)i + (SG_BAKE_SPLAT_FLOATS - 1));
             if (i >= ps->count)
                 continue; /* not a site of the table (a point's own colour) */
             __builtin_prefetch(&ps->nx[i]);
