@@ -199,28 +199,31 @@ static void to_ray_stats(sg_ray_stats *s, const sg_hybrid_stats *hs)
 static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray *ray, const sg_hybrid_hit *hp,
                      int found, sg_hit *hit)
 {
-    const sg_hybrid_hit hh = *hp;
+    /* Read field by field, not copied: the hit was just written field by
+     * field (write_hit), and a copy's wide loads of those narrow stores
+     * stall on store forwarding. */
+    const sg_hybrid_hit *hh = hp;
     if (!found) {
         hit->splat = SG_INVALID_ID;
         return 0;
     }
-    hit->t = hh.t;
-    hit->p = hh.p;
-    if (hh.node != SG_INVALID_ID) {
-        hit->n = hh.ns;
-        hit->splat = (uint32_t)(s->vertex_count + hh.node);
+    hit->t = hh->t;
+    hit->p = hh->p;
+    if (hh->node != SG_INVALID_ID) {
+        hit->n = hh->ns;
+        hit->splat = (uint32_t)(s->vertex_count + hh->node);
         hit->leaf = SG_INVALID_ID;
         hit->b1 = hit->b2 = 0.0f;
         return 1;
     }
     /* The side the ray met is the geometric normal's; a shading normal
      * that says otherwise (a grazing ray) gives way to it. */
-    float dg = sg_v3_dot(ray->dir, hh.ng), ds = sg_v3_dot(ray->dir, hh.ns);
-    hit->n = (dg < 0.0f) == (ds < 0.0f) && ds != 0.0f ? hh.ns : hh.ng;
-    hit->leaf = hh.slot;
-    hit->b1 = hh.b1;
-    hit->b2 = hh.b2;
-    hit->splat = sg_hybrid__dominant_site(hh.vertex, hh.b1, hh.b2); /* the largest weight */
+    float dg = sg_v3_dot(ray->dir, hh->ng), ds = sg_v3_dot(ray->dir, hh->ns);
+    hit->n = (dg < 0.0f) == (ds < 0.0f) && ds != 0.0f ? hh->ns : hh->ng;
+    hit->leaf = hh->slot;
+    hit->b1 = hh->b1;
+    hit->b2 = hh->b2;
+    hit->splat = sg_hybrid__dominant_site(hh->vertex, hh->b1, hh->b2); /* the largest weight */
     return 1;
 }
 
