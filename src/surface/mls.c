@@ -38,7 +38,11 @@
  *     (F < 0, their normal sum towards the ray) enters there: it grazed the
  *     rim of a closed part, where the zero set leaves the covered region,
  *     and without the rule it saw the part's inside (a dark pixel on a
- *     silhouette, 0.36 in a white furnace). Other rays keep invariant 2,
+ *     silhouette, 0.36 in a white furnace). The hit's point is that
+ *     sample moved onto the front surface (its distance F / (W |N|) along
+ *     the normal), so that it is seen from the front side and not from
+ *     the part's inside (a thin sheet's rim read its inside). Other rays
+ *     keep invariant 2,
  *     so the bake's rays and the openings they escape through are as
  *     before; the reference's camera rays carry the flag too, so the
  *     reference and the lookup frame see one surface.
@@ -731,7 +735,9 @@ static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count
                 /* invariant 7; not at j = 0: this path carries nothing in
                  * from the previous leaf, so its first sample has no
                  * predecessor whatever the ray met before */
-                *hit = (sg_hit){.t = t, .p = x, .n = sg_v3_normalize(N), .splat = id};
+                const float len = sg_v3_length(N);
+                const sg_vec3 n = sg_v3_scale(N, 1.0f / len);
+                *hit = (sg_hit){.t = t, .p = sg_v3_madd(x, n, -F[gi] / (W[gi] * len)), .n = n, .splat = id};
                 return 1;
             }
             if (W[gi] < W_EPS || !prev_ok[gi] || !group_crossing(gi, prevF[gi], F[gi]) ||
@@ -940,14 +946,22 @@ static int past_back_layer(const actives *a, const actives *front, actives *spli
 /* Invariant 7's entry: the hit at the covered sample t (lane l of the
  * front group's normal sums N, which face the ray). 0, hit untouched, if
  * no splat has a positive weight there after all. */
-static int take_rim_entry(const actives *front, sg_kernel kernel, const sg_ray *ray, float t, float N[3][8], int l,
-                          sg_hit *hit)
+static int take_rim_entry(const actives *front, sg_kernel kernel, const sg_ray *ray, float t, float F, float W,
+                          float N[3][8], int l, sg_hit *hit)
 {
     const uint32_t splat = dominant_splat(front, kernel, t);
     if (splat == SG_INVALID_ID)
         return 0;
-    *hit = (sg_hit){.t = t, .p = sg_v3_madd(ray->org, ray->dir, t),
-                    .n = sg_v3_normalize(sg_v3(N[0][l], N[1][l], N[2][l])), .splat = splat};
+    const sg_vec3 nsum = sg_v3(N[0][l], N[1][l], N[2][l]);
+    const float len = sg_v3_length(nsum);
+    const sg_vec3 n = sg_v3_scale(nsum, 1.0f / len);
+    /* The sample lies behind the front surface (F < 0), inside the part:
+     * the hit is put on that surface, its distance F / (W |N|) along the
+     * normal ahead, so that what is seen from there (the bake's light
+     * sites, the reference's paths) is the front side's and not the
+     * part's inside (a thin sheet's rim read its inside). */
+    const float dist = F / (W * len);
+    *hit = (sg_hit){.t = t, .p = sg_v3_madd(sg_v3_madd(ray->org, ray->dir, t), n, -dist), .n = n, .splat = splat};
     return 1;
 }
 
@@ -1033,7 +1047,8 @@ int sg_mls_intersect_leaf(const sg_splat_soa *s, size_t first, size_t count, con
             float best_t = INFINITY;
             if (rim_entry && !prev[G_FRONT].ok && W8[G_FRONT][l] >= W_EPS && F8[G_FRONT][l] < 0.0f &&
                 N8[G_FRONT][0][l] * ray->dir.x + N8[G_FRONT][1][l] * ray->dir.y + N8[G_FRONT][2][l] * ray->dir.z <
-                    0.0f && take_rim_entry(g[G_FRONT], mp->kernel, ray, ts[j], N8[G_FRONT], l, hit))
+                    0.0f && take_rim_entry(g[G_FRONT], mp->kernel, ray, ts[j], F8[G_FRONT][l], W8[G_FRONT][l],
+                                                N8[G_FRONT], l, hit))
                 return 1; /* invariant 7 */
             for (int gi = 0; gi < 2; ++gi) {
                 const field_prev *pv = &prev[gi];

@@ -42,8 +42,9 @@
  * surface's normal, not the one turned to the crossing's side (iso.c
  * accept); 9: MLS bridges gaps in the supports up to a sample spacing
  * (mls.c, invariant 2); 10: MLS camera rays enter a rim they meet behind
- * the splats facing them (mls.c, invariant 7). */
-#define SG_VERIFY_REF_VERSION 10u
+ * the splats facing them (mls.c, invariant 7); 11: and such a hit lies
+ * on the front surface, not at the sample inside the part. */
+#define SG_VERIFY_REF_VERSION 11u
 
 typedef struct sg_verify_ref_desc {
     sg_camera camera;      /* required                                   */

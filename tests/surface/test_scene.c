@@ -511,6 +511,12 @@ static void test_mls_camera_ray_enters_at_rim(void **state)
                 /* The right splat's support begins at x = 0.5 g + 1 - 1; the
                  * first covered sample lies within one sample spacing of it. */
                 assert_true(h.p.x >= 0.5f * g - 1e-4f && h.p.x <= 0.5f * g + 0.1f);
+                /* ... and the hit lies on the plane (the front surface; one
+                 * splat's field is its plane distance), not at the sample
+                 * behind it, where the ray is: y = -0.02 or so there */
+                const float ray_y = ray.org.y + ray.dir.y * h.t;
+                if (!(fabsf(h.p.y) < 1e-5f) || !(ray_y < -0.005f))
+                    fail_msg("rim entry at y %g (the ray there: %g); want it on the plane y = 0", h.p.y, ray_y);
                 assert_true(sg_v3_dot(h.n, ray.dir) < 0.0f);
                 assert_int_equal(h.splat, 1);
             } else if (got)
