@@ -246,6 +246,11 @@ sg_status sg_truth_compare_view(const sg_truth *t, const sg_world *w, const sg_c
     for (long i = 0; i < n; i++) {
         int x = (int)(i % width), y = (int)(i / width);
         sg_ray ray = sg_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, width, height);
+        /* The exact surface, as the reference sees it (ref/pathtrace.c):
+         * with the pixel's footprint the ISO's coarse node planes cover
+         * holes its full-detail surface keeps, and the map measured the
+         * viewer's picture instead of the surface's. */
+        ray.spread = 0.0f;
         float tt;
         sg_vec3 nt;
         int ht = sg_truth_intersect(t, &ray, &tt, &nt);

@@ -82,8 +82,9 @@ typedef struct sg_truth_view_stats {
     size_t nonfinite_normals; /* splat hits with a non-finite normal     */
 } sg_truth_view_stats;
 
-/* One ray per pixel centre (sg_camera_ray) against the truth and the world.
- * Errors: SG_ERR_INVALID_ARG (bad size). */
+/* One ray per pixel centre (sg_camera_ray, without its footprint: the
+ * surfaces at full detail, as the reference sees them) against the truth
+ * and the world. Errors: SG_ERR_INVALID_ARG (bad size). */
 sg_status sg_truth_compare_view(const sg_truth *t, const sg_world *w, const sg_camera *cam, int width, int height,
                                 sg_truth_view_stats *out, sg_error *err);
 
