@@ -3,7 +3,7 @@
  * bake material (issue "The interactive walkthrough viewer").
  *
  * Scene: the Stanford dragon sampled to each size (default 32k, 125k, 1M,
- * 4M points), scaled to SCENE_LENGTH units along its longest side and
+ * 4M points), scaled to BENCH_SCENE_LENGTH (10) units along its longest side and
  * standing on y = 0 (as bench_ref), on the builtin ground (Lambert 0.5),
  * under courtyard.exr (the builtin "sky" when absent). Two materials for
  * the dragon: "diffuse" (Lambert, albedo 0.7) and "glossy" (GGX, albedo
@@ -86,7 +86,7 @@
 #define DEFAULT_MESH SG_SHARED_DATA_DIR "/meshes/stanford_dragon/dragon_vrip.ply"
 #define DEFAULT_ENVMAP SG_SHARED_DATA_DIR "/envmaps/blender_studiolights/courtyard.exr"
 #define PATH_DIR "out/bench_view"
-#define SCENE_LENGTH 10.0f
+
 #define FOV_DEG 40.0f
 #define DRAGON_ALBEDO 0.7f
 #define GROUND_ALBEDO 0.5f
@@ -305,27 +305,7 @@ static void write_text(FILE *f, const void *ctx)
 
 /* ---- scene and path ---------------------------------------------------- */
 
-typedef struct scene_setup {
-    float scale;
-    sg_vec3 translate;
-    sg_aabb world_box;
-    int have_envmap;
-} scene_setup;
-
-static sg_status setup_scene(const options *o, scene_setup *s, sg_error *err)
-{
-    sg_ground_placement pl;
-    sg_status st = bench_place_mesh(o->mesh, SCENE_LENGTH, &pl, err);
-    if (st != SG_OK)
-        return st;
-    s->scale = pl.scale;
-    s->translate = pl.translate;
-    s->world_box = pl.placed;
-    s->have_envmap = access(o->envmap, R_OK) == 0;
-    return SG_OK;
-}
-
-static int scene_json(const options *o, const scene_setup *s, size_t points, int mat, int surf, char *out,
+static int scene_json(const options *o, const bench_scene *s, size_t points, int mat, int surf, char *out,
                       size_t cap)
 {
     char mesh[2048], env[2048], envpart[2200], material[256];
@@ -368,7 +348,7 @@ static int scene_json(const options *o, const scene_setup *s, size_t points, int
 
 /* The path of the file's head comment, around world_box (centred in x, z,
  * standing on y = 0). */
-static sg_status make_path(const scene_setup *s, sg_campath *p, sg_error *err)
+static sg_status make_path(const bench_scene *s, sg_campath *p, sg_error *err)
 {
     const float pi = 3.14159265f;
     float h = s->world_box.hi.y;
@@ -710,7 +690,7 @@ static void write_md(FILE *f, const void *ctx)
                "albedo %g, roughness %g, specular %g. A glossy lookup also reads the directional bins "
                "of the sample points under the hit (bake/glossy.h), so its frames cost more than the diffuse "
                "ones.\n\n",
-            (double)SCENE_LENGTH, shown_path(rp->env_used), o->direct, (double)DRAGON_ALBEDO,
+            (double)BENCH_SCENE_LENGTH, shown_path(rp->env_used), o->direct, (double)DRAGON_ALBEDO,
             (double)DRAGON_ALBEDO, (double)GGX_ROUGHNESS, (double)GGX_SPECULAR);
     fprintf(f, "Surfaces (`--surfaces`): %s. Each is set on both models, the dragon's and the ground's "
                "(`\"surface\": {\"model\": ...}`, surface/scene.h: *mls* = the MLS surface on the splats' "
@@ -838,8 +818,9 @@ int main(int argc, char **argv)
            rp.nproc, omp_get_max_threads(), o.threads, rp.load0, o.quick ? " (quick)" : "");
 
     sg_error err;
-    scene_setup setup = {0};
-    if (setup_scene(&o, &setup, &err) != SG_OK)
+    bench_scene setup = {0};
+    const bench_scene_desc sd = bench_dragon_scene(o.mesh, o.envmap);
+    if (bench_scene_setup(&sd, &setup, &err) != SG_OK)
         return fail("%s", err.message);
     rp.env_used = setup.have_envmap ? o.envmap : "builtin sky (envmap file not found)";
 
