@@ -196,13 +196,12 @@ static void to_ray_stats(sg_ray_stats *s, const sg_hybrid_stats *hs)
 }
 
 /* The sg_hit of a hierarchy hit (found) or miss. */
-static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray *ray, const sg_hybrid_hit *hp,
+/* hh is read field by field, not copied: it was just written field by
+ * field (write_hit), and a copy's wide loads of those narrow stores stall
+ * on store forwarding. */
+static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray *ray, const sg_hybrid_hit *hh,
                      int found, sg_hit *hit)
 {
-    /* Read field by field, not copied: the hit was just written field by
-     * field (write_hit), and a copy's wide loads of those narrow stores
-     * stall on store forwarding. */
-    const sg_hybrid_hit *hh = hp;
     if (!found) {
         hit->splat = SG_INVALID_ID;
         return 0;

@@ -42,10 +42,9 @@
  *     sample moved onto the front surface (its distance F / (W |N|) along
  *     the normal), so that it is seen from the front side and not from
  *     the part's inside (a thin sheet's rim read its inside). Other rays
- *     keep invariant 2,
- *     so the bake's rays and the openings they escape through are as
- *     before; the reference's camera rays carry the flag too, so the
- *     reference and the lookup frame see one surface.
+ *     keep invariant 2, so the bake's rays and the openings they escape
+ *     through are as before; the reference's camera rays carry the flag
+ *     too, so the reference and the lookup frame see one surface.
  */
 #include "surface/mls.h"
 
@@ -706,6 +705,18 @@ static float field_group(const sg_splat_soa *s, size_t first, size_t count, sg_k
     return sg_v3_dot(a.P, a.N);
 }
 
+/* Invariant 7's hit point and normal: the sample x, behind the front
+ * surface (F < 0, inside the part), moved onto it along the normal sum's
+ * direction by its distance F / (W |N|), so that what is seen from there
+ * (the bake's light sites, the reference's paths) is the front side's and
+ * not the part's inside (a thin sheet's rim read its inside). */
+static sg_vec3 onto_front(sg_vec3 x, sg_vec3 nsum, float F, float W, sg_vec3 *n)
+{
+    const float len = sg_v3_length(nsum);
+    *n = sg_v3_scale(nsum, 1.0f / len);
+    return sg_v3_madd(x, *n, -F / (W * len));
+}
+
 /* Slow path for a leaf with more than MAX_ACTIVE splats on the ray (rare:
  * degenerate inputs such as thousands of duplicate points): each group's
  * field from the leaf arrays directly, sample by sample, with the crossing
@@ -735,9 +746,9 @@ static int intersect_leaf_slow(const sg_splat_soa *s, size_t first, size_t count
                 /* invariant 7; not at j = 0: this path carries nothing in
                  * from the previous leaf, so its first sample has no
                  * predecessor whatever the ray met before */
-                const float len = sg_v3_length(N);
-                const sg_vec3 n = sg_v3_scale(N, 1.0f / len);
-                *hit = (sg_hit){.t = t, .p = sg_v3_madd(x, n, -F[gi] / (W[gi] * len)), .n = n, .splat = id};
+                sg_vec3 n;
+                const sg_vec3 p = onto_front(x, N, F[gi], W[gi], &n);
+                *hit = (sg_hit){.t = t, .p = p, .n = n, .splat = id};
                 return 1;
             }
             if (W[gi] < W_EPS || !prev_ok[gi] || !group_crossing(gi, prevF[gi], F[gi]) ||
@@ -952,16 +963,9 @@ static int take_rim_entry(const actives *front, sg_kernel kernel, const sg_ray *
     const uint32_t splat = dominant_splat(front, kernel, t);
     if (splat == SG_INVALID_ID)
         return 0;
-    const sg_vec3 nsum = sg_v3(N[0][l], N[1][l], N[2][l]);
-    const float len = sg_v3_length(nsum);
-    const sg_vec3 n = sg_v3_scale(nsum, 1.0f / len);
-    /* The sample lies behind the front surface (F < 0), inside the part:
-     * the hit is put on that surface, its distance F / (W |N|) along the
-     * normal ahead, so that what is seen from there (the bake's light
-     * sites, the reference's paths) is the front side's and not the
-     * part's inside (a thin sheet's rim read its inside). */
-    const float dist = F / (W * len);
-    *hit = (sg_hit){.t = t, .p = sg_v3_madd(sg_v3_madd(ray->org, ray->dir, t), n, -dist), .n = n, .splat = splat};
+    sg_vec3 n;
+    const sg_vec3 p = onto_front(sg_v3_madd(ray->org, ray->dir, t), sg_v3(N[0][l], N[1][l], N[2][l]), F, W, &n);
+    *hit = (sg_hit){.t = t, .p = p, .n = n, .splat = splat};
     return 1;
 }
 
