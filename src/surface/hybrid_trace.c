@@ -997,6 +997,139 @@ static void packet_cone(unsigned lanes, psoa *P)
 }
 #endif
 
+#if SG_V16_SIMD
+/* Unit vectors of sixteen lanes: x, y, z scaled by 1 / sqrt(l2) where
+ * l2 = x x + y y + z z > 1e-30, else zero (sg_v3_normalize, lane by
+ * lane, with its operations in its order). */
+static inline void normalize16(sg_v16 *x, sg_v16 *y, sg_v16 *z)
+{
+    const sg_v16 l2 = sg_v16_add(sg_v16_add(sg_v16_mul(*x, *x), sg_v16_mul(*y, *y)), sg_v16_mul(*z, *z));
+    const unsigned big = sg_v16_gt(l2, sg_v16_set1(1e-30f));
+    const sg_v16 s = sg_v16_div(sg_v16_set1(1.0f), sg_v16_sqrt(l2)), zero = sg_v16_set1(0.0f);
+    *x = sg_v16_select(big, sg_v16_mul(*x, s), zero);
+    *y = sg_v16_select(big, sg_v16_mul(*y, s), zero);
+    *z = sg_v16_select(big, sg_v16_mul(*z, s), zero);
+}
+
+/* sg_oct_decode of sixteen codes whose halves qx, qy were converted to
+ * float ((float)(int16_t) of each half, exact), lane by lane. */
+static inline void oct_decode16(const float *qx, const float *qy, sg_v16 *x, sg_v16 *y, sg_v16 *z)
+{
+    const sg_v16 one = sg_v16_set1(1.0f), zero = sg_v16_set1(0.0f), minus = sg_v16_set1(-1.0f);
+    const sg_v16 k = sg_v16_set1(1.0f / 32767.0f);
+    sg_v16 a = sg_v16_mul(sg_v16_load(qx), k), b = sg_v16_mul(sg_v16_load(qy), k);
+    const sg_v16 c = sg_v16_sub(sg_v16_sub(one, sg_v16_abs(a)), sg_v16_abs(b));
+    const unsigned fold = sg_v16_lt(c, zero);
+    const sg_v16 fa = sg_v16_mul(sg_v16_sub(one, sg_v16_abs(b)), sg_v16_select(sg_v16_lt(a, zero), minus, one));
+    const sg_v16 fb = sg_v16_mul(sg_v16_sub(one, sg_v16_abs(a)), sg_v16_select(sg_v16_lt(b, zero), minus, one));
+    a = sg_v16_select(fold, fa, a);
+    b = sg_v16_select(fold, fb, b);
+    const sg_v16 inv = sg_v16_div(one, sg_v16_sqrt(sg_v16_add(sg_v16_add(sg_v16_mul(a, a), sg_v16_mul(b, b)),
+                                                             sg_v16_mul(c, c))));
+    *x = sg_v16_mul(a, inv);
+    *y = sg_v16_mul(b, inv);
+    *z = sg_v16_mul(c, inv);
+}
+
+/* write_hit for the rays of `lanes` whose best is a triangle, across the
+ * lanes: the hit point, the geometric normal and the interpolated shading
+ * normal by write_hit's expressions in its order (v16.h: no fused
+ * multiply-adds), so every lane gets write_hit's bits
+ * (hybrid::intersect16_matches_single compares each field). One lane at a
+ * time, the scalar divisions and square roots of the normals (five a hit)
+ * were the largest part of a packet's own time outside the walk. Returns
+ * the lanes written; the caller writes the others. */
+static unsigned write_hits16(const sg_hybrid *h, const best *bst, unsigned lanes, sg_hybrid_hit *hits)
+{
+    unsigned tri = 0;
+    for (unsigned m = lanes; m; m &= m - 1) {
+        const int r = __builtin_ctz(m);
+        tri |= (unsigned)(bst[r].key >> 32 == 0) << r;
+    }
+    if (!tri)
+        return 0;
+    /* the lanes' inputs, one array per quantity; a lane outside tri is a
+     * copy of the first in it (computed, never read; no zero-fill, whose
+     * string store cost more than the copies) */
+    _Alignas(64) float P[9][16], B1[16], B2[16], Q[6][16];
+    const uint32_t *vn = h->vnormal;
+    const int f = __builtin_ctz(tri);
+    for (int r = 0; r < 16; ++r) {
+        const int src = tri >> r & 1u ? r : f;
+        const uint32_t i = (uint32_t)bst[src].key;
+        const uint32_t *v = h->tri + 3 * (size_t)i;
+        for (int q = 0; q < 3; ++q) {
+            const float *x = h->pos + 3 * (size_t)v[q];
+            P[3 * q][r] = x[0];
+            P[3 * q + 1][r] = x[1];
+            P[3 * q + 2][r] = x[2];
+            if (vn) {
+                const uint32_t e = vn[v[q]];
+                Q[2 * q][r] = (float)(int16_t)(uint16_t)(e & 0xFFFFu);
+                Q[2 * q + 1][r] = (float)(int16_t)(uint16_t)(e >> 16);
+            }
+        }
+        B1[r] = bst[src].b1;
+        B2[r] = bst[src].b2;
+        if (src != r)
+            continue;
+        sg_hybrid_hit *hit = &hits[r];
+        hit->t = bst[r].t;
+        hit->back = !bst[r].front;
+        hit->triangle = h->tri_id[i];
+        hit->slot = i;
+        memcpy(hit->vertex, v, sizeof hit->vertex);
+        hit->b1 = bst[r].b1;
+        hit->b2 = bst[r].b2;
+    }
+    const sg_v16 b1 = sg_v16_load(B1), b2 = sg_v16_load(B2);
+    const sg_v16 b0 = sg_v16_sub(sg_v16_sub(sg_v16_set1(1.0f), b1), b2);
+    sg_v16 a[3], b[3], c[3];
+    for (int q = 0; q < 3; ++q) {
+        a[q] = sg_v16_load(P[q]);
+        b[q] = sg_v16_load(P[3 + q]);
+        c[q] = sg_v16_load(P[6 + q]);
+    }
+    /* p = b0 a + b1 b + b2 c */
+    _Alignas(64) float out[9][16];
+    for (int q = 0; q < 3; ++q)
+        sg_v16_store(out[q], sg_v16_add(sg_v16_add(sg_v16_mul(b0, a[q]), sg_v16_mul(b1, b[q])), sg_v16_mul(b2, c[q])));
+    /* ng = normalize((b - a) x (c - a)), tri_normal */
+    const sg_v16 e1x = sg_v16_sub(b[0], a[0]), e1y = sg_v16_sub(b[1], a[1]), e1z = sg_v16_sub(b[2], a[2]);
+    const sg_v16 e2x = sg_v16_sub(c[0], a[0]), e2y = sg_v16_sub(c[1], a[1]), e2z = sg_v16_sub(c[2], a[2]);
+    sg_v16 gx = sg_v16_sub(sg_v16_mul(e1y, e2z), sg_v16_mul(e1z, e2y));
+    sg_v16 gy = sg_v16_sub(sg_v16_mul(e1z, e2x), sg_v16_mul(e1x, e2z));
+    sg_v16 gz = sg_v16_sub(sg_v16_mul(e1x, e2y), sg_v16_mul(e1y, e2x));
+    normalize16(&gx, &gy, &gz);
+    sg_v16 sx = gx, sy = gy, sz = gz;
+    if (h->vnormal) {
+        /* ns = normalize(n0 b0 + n1 b1 + n2 b2), ng where that is zero */
+        sg_v16 nx[3], ny[3], nz[3]; /* Q was filled (vn) */
+        for (int q = 0; q < 3; ++q)
+            oct_decode16(Q[2 * q], Q[2 * q + 1], &nx[q], &ny[q], &nz[q]);
+        sg_v16 x = sg_v16_add(sg_v16_add(sg_v16_mul(nx[0], b0), sg_v16_mul(nx[1], b1)), sg_v16_mul(nx[2], b2));
+        sg_v16 y = sg_v16_add(sg_v16_add(sg_v16_mul(ny[0], b0), sg_v16_mul(ny[1], b1)), sg_v16_mul(ny[2], b2));
+        sg_v16 z = sg_v16_add(sg_v16_add(sg_v16_mul(nz[0], b0), sg_v16_mul(nz[1], b1)), sg_v16_mul(nz[2], b2));
+        normalize16(&x, &y, &z);
+        const sg_v16 zero = sg_v16_set1(0.0f);
+        const unsigned flat = sg_v16_eq(x, zero) & sg_v16_eq(y, zero) & sg_v16_eq(z, zero);
+        sx = sg_v16_select(flat, gx, x);
+        sy = sg_v16_select(flat, gy, y);
+        sz = sg_v16_select(flat, gz, z);
+    }
+    sg_v16_store(out[3], gx), sg_v16_store(out[4], gy), sg_v16_store(out[5], gz);
+    sg_v16_store(out[6], sx), sg_v16_store(out[7], sy), sg_v16_store(out[8], sz);
+    for (unsigned m = tri; m; m &= m - 1) {
+        const int r = __builtin_ctz(m);
+        sg_hybrid_hit *hit = &hits[r];
+        hit->p = sg_v3(out[0][r], out[1][r], out[2][r]);
+        hit->ng = sg_v3(out[3][r], out[4][r], out[5][r]);
+        hit->ns = sg_v3(out[6][r], out[7][r], out[8][r]);
+    }
+    return tri;
+}
+#endif
+
 unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned mask, const sg_footprint *fp,
                                sg_hybrid_hit *hits, sg_hybrid_stats *stats)
 {
@@ -1056,7 +1189,13 @@ unsigned sg_hybrid_intersect16(const sg_hybrid *h, const sg_ray *rays, unsigned 
                 __builtin_prefetch(&h->vnormal[v[q]]);
     }
 #endif
-    for (unsigned m = lanes; m; m &= m - 1) {
+    unsigned rest = lanes;
+#if SG_V16_SIMD
+    const unsigned tri = write_hits16(h, bst, lanes, hits);
+    found |= tri;
+    rest &= ~tri;
+#endif
+    for (unsigned m = rest; m; m &= m - 1) {
         const int i = __builtin_ctz(m);
         if (write_hit(h, &rays[i], &bst[i], &hits[i])) {
             found |= 1u << i;

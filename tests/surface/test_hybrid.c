@@ -247,7 +247,8 @@ static int same_hit(const sg_hybrid_hit *a, const sg_hybrid_hit *b)
     return memcmp(&a->t, &b->t, sizeof a->t) == 0 && memcmp(&a->p, &b->p, sizeof a->p) == 0 &&
            memcmp(&a->ns, &b->ns, sizeof a->ns) == 0 && memcmp(&a->ng, &b->ng, sizeof a->ng) == 0 &&
            a->triangle == b->triangle && a->node == b->node && memcmp(&a->b1, &b->b1, sizeof a->b1) == 0 &&
-           memcmp(&a->b2, &b->b2, sizeof a->b2) == 0 && a->back == b->back;
+           memcmp(&a->b2, &b->b2, sizeof a->b2) == 0 && a->back == b->back && a->slot == b->slot &&
+           memcmp(a->vertex, b->vertex, sizeof a->vertex) == 0;
 }
 
 static size_t count_different(const sg_hybrid_hit *a, const sg_hybrid_hit *b)
