@@ -49,6 +49,7 @@
 static const float INV_PI = 0.318309886183791f;
 
 enum { LOOKUP_SPLATS = 32, TILE = 16 };
+_Static_assert(LOOKUP_SPLATS <= 32, "keep_facing marks a lookup's sites in one 32-bit word");
 
 struct sg_bake {
     size_t models;
@@ -374,18 +375,28 @@ static int keep_facing(const sg_world *w, const sg_world_hit *h, sg_vec3 wo, uin
     const sg_sites *ps = sg_scene_sites(sc);
     float kept = 0.0f;
     int k = 0;
+    uint32_t away = 0; /* bit j: site j faces away (LOOKUP_SPLATS <= 32) */
     for (int j = 0; j < n; ++j) {
         uint32_t i = ids[j];
-        if (ps->nx[i] * h->hit.n.x + ps->ny[i] * h->hit.n.y + ps->nz[i] * h->hit.n.z < 0.0f)
+        if (ps->nx[i] * h->hit.n.x + ps->ny[i] * h->hit.n.y + ps->nz[i] * h->hit.n.z < 0.0f) {
+            away |= 1u << j;
             continue;
-        ids[k] = i;
-        wts[k++] = wts[j];
+        }
+        ++k;
         kept += wts[j];
     }
+    /* All same-facing (the usual case), or none with weight: the list as
+     * it is. (Compacting before this test left a list of the kept sites'
+     * zero weights and a stale tail: black specks where the only weighted
+     * site faced away, 3 channels of 8 ISO frames at 128 x 128.) */
     if (k == n || !(kept > 0.0f))
-        return n; /* all same-facing (the usual case), or none: as they are */
-    for (int j = 0; j < k; ++j)
-        wts[j] /= kept;
+        return n;
+    k = 0;
+    for (int j = 0; j < n; ++j)
+        if (!(away >> j & 1u)) {
+            ids[k] = ids[j];
+            wts[k++] = wts[j] / kept;
+        }
     return k;
 }
 

@@ -178,8 +178,10 @@ uint64_t sg_bake_param_hash(const sg_bake_desc *d);
  * surface; 6: sites off the surface are never sample points, and in the
  * interpolation a refined level hides the coarser ones (samples.h); 7: the
  * MLS surface bridges gaps in the supports up to a sample spacing (mls.c),
- * so its rays see other hits. */
-#define SG_BAKE_ALGORITHM 7u
+ * so its rays see other hits; 8: a lookup whose only weighted sites face
+ * away from the hit's normal takes its sites as they are (it read zero
+ * weights: bake.c keep_facing), which the glossy bins' rays read. */
+#define SG_BAKE_ALGORITHM 8u
 
 size_t sg_bake_model_count(const sg_bake *b);
 

@@ -14,7 +14,9 @@
 #include "bake/glossy.h"
 #include "math/rng.h"
 #include "ref/pathtrace.h"
+#include "render/camera.h"
 #include "render/world.h"
+#include "surface/scene.h"
 
 static sg_bake *bake(const sg_world *w, size_t photons, int depth, unsigned k)
 {
@@ -545,6 +547,121 @@ static void test_bake_deterministic_across_threads_hybrid(void **state)
     deterministic_across_threads("hybrid");
 }
 
+
+/* The lookup's choice of sites (bake.c keep_facing) in its three cases:
+ * every site facing the hit's normal; some away, the rest renormalised;
+ * the only weighted sites away, the list taken as it is. The last was a
+ * black speck before (the list was compacted before it was judged, which
+ * left the kept sites' zero weights and a stale tail): on the sphere's
+ * front, which the sky and the ground light everywhere, such a lookup
+ * must not be black. To reach the cases on every surface model (a Lambert
+ * sphere with emission, a GGX ground with bins, both sides) two hits in
+ * three get a normal near their tangent plane, and a third of the
+ * hybrid's triangle hits among them one vertex's weight alone (b1 = 1 or
+ * b2 = 1). sg_bake_lookup16 gives each of them sg_bake_lookup's bits. */
+static void test_bake_lookup_keep_facing(void **state)
+{
+    (void)state;
+    const char *models[4] = {"mls", "disk", "iso", "hybrid"};
+    for (int mi = 0; mi < 4; ++mi) {
+        char json[640];
+        snprintf(json, sizeof json,
+                 "{\"models\":[{\"builtin\":\"sphere\",\"points\":3000,\"surface\":{\"model\":\"%s\"},"
+                 "\"transform\":{\"translate\":[0,1,0]},\"material\":{\"albedo\":[0.8,0.6,0.4],"
+                 "\"emission\":[0.01,0.02,0.03]}},{\"builtin\":\"ground\",\"points\":2000,"
+                 "\"surface\":{\"model\":\"%s\"},\"material\":{\"type\":\"ggx\",\"roughness\":0.4,"
+                 "\"specular\":0.3}}],\"envmap\":{\"builtin\":\"sky\"}}",
+                 models[mi], models[mi]);
+        sg_world *w = sg_test_world_from_json(json);
+        sg_bake_desc bd = {.photons = {.count = 20000, .seed = 3}, .direct_samples = 2, .glossy_res = 4, .glossy_rays = 16};
+        sg_bake *b = NULL;
+        sg_error err = {0};
+        if (sg_bake_create(w, &bd, &b, &err) != SG_OK)
+            fail_msg("%s: bake: %s", models[mi], err.message);
+        uint64_t rng = 99;
+        size_t lanes = 0, glossy = 0, facing = 0, renorm = 0, as_is = 0;
+        const sg_vec3 eyes[3] = {sg_v3(0, 3, 5), sg_v3(1.2f, 1.6f, 1.4f), sg_v3(-4, 0.3f, 2)};
+        const int W = 40, H = 40;
+        for (int v = 0; v < 3; ++v) {
+            sg_camera cam = camera(eyes[v], sg_v3(0, 0.8f, 0), 50.0f);
+            for (int y = 0; y < H; y += 4)
+                for (int x = 0; x < W; x += 4) {
+                    sg_ray rays[16];
+                    sg_world_hit h[16];
+                    const unsigned mask = sg_camera_block16(&cam, x, y, W, H, rays);
+                    const unsigned hit = sg_world_intersect16(w, rays, mask, h, NULL);
+                    sg_vec3 wo[16], got[16];
+                    for (unsigned m = hit; m; m &= m - 1) {
+                        const int r = __builtin_ctz(m);
+                        wo[r] = sg_v3_scale(rays[r].dir, -1.0f);
+                        const uint64_t u = (uint64_t)(sg_test_rand01(&rng) * 1048576.0f);
+                        if (u % 3 != 2) {
+                            /* a normal near the surface's tangent plane, so
+                             * that its sites straddle it */
+                            const sg_vec3 n = h[r].hit.n, d = sg_test_random_dir(&rng);
+                            const sg_vec3 t = sg_v3_sub(d, sg_v3_scale(n, sg_v3_dot(d, n)));
+                            const float tilt = 0.1f * sg_test_rand01(&rng) - 0.05f;
+                            const sg_vec3 m2 = sg_v3_normalize(sg_v3_add(sg_v3_normalize(t), sg_v3_scale(n, tilt)));
+                            if (m2.x != 0.0f || m2.y != 0.0f || m2.z != 0.0f)
+                                h[r].hit.n = m2;
+                        }
+                        if (mi == 3 && u % 3 == 1 && h[r].hit.leaf != SG_INVALID_ID) {
+                            h[r].hit.b1 = (u >> 8 & 1u) ? 1.0f : 0.0f;
+                            h[r].hit.b2 = 1.0f - h[r].hit.b1;
+                        }
+                    }
+                    sg_bake_lookup16(b, w, h, wo, hit, got);
+                    for (unsigned m = hit; m; m &= m - 1) {
+                        const int r = __builtin_ctz(m);
+                        const sg_vec3 want = sg_bake_lookup(b, w, &h[r], wo[r]);
+                        if (memcmp(&want, &got[r], sizeof want) != 0)
+                            fail_msg("%s, view %d, block (%d, %d), ray %d (model %u): lookup %.9g %.9g %.9g, "
+                                     "lookup16 %.9g %.9g %.9g",
+                                     models[mi], v, x, y, r, h[r].model, (double)want.x, (double)want.y,
+                                     (double)want.z, (double)got[r].x, (double)got[r].y, (double)got[r].z);
+                        ++lanes;
+                        glossy += h[r].model == 1;
+                        /* which of keep_facing's cases this was */
+                        const sg_scene *sc = sg_world_scene(w, h[r].model);
+                        const sg_sites *ps = sg_scene_sites(sc);
+                        uint32_t ids[32];
+                        float wts[32];
+                        const int n = sg_scene_hit_sites(sc, &h[r].hit, ids, wts, 32);
+                        float kept = 0.0f;
+                        int away = 0;
+                        for (int j = 0; j < n; ++j) {
+                            const sg_vec3 sn = sg_v3(ps->nx[ids[j]], ps->ny[ids[j]], ps->nz[ids[j]]);
+                            if (sg_v3_dot(sn, h[r].hit.n) < 0.0f)
+                                ++away;
+                            else
+                                kept += wts[j];
+                        }
+                        if (!away) {
+                            ++facing;
+                        } else if (kept > 0.0f) {
+                            ++renorm;
+                        } else if (away < n) {
+                            ++as_is;
+                            if (h[r].model == 0 && sg_v3_dot(wo[r], h[r].hit.n) >= 0.0f &&
+                                !(got[r].x + got[r].y + got[r].z > 0.1f))
+                                fail_msg("%s, view %d, block (%d, %d), ray %d: the only weighted sites face away "
+                                         "and the lookup is black (%.9g %.9g %.9g)",
+                                         models[mi], v, x, y, r, (double)got[r].x, (double)got[r].y,
+                                         (double)got[r].z);
+                        }
+                    }
+                }
+        }
+        print_message("%s: %zu lookups (%zu glossy): all facing %zu, renormalised %zu, taken as they are %zu\n",
+                      models[mi], lanes, glossy, facing, renorm, as_is);
+        assert_true(glossy > 100 && lanes - glossy > 100 && facing > 100 && renorm > 100);
+        if (mi == 3) /* zero weights: a vertex's alone */
+            assert_true(as_is > 5);
+        sg_bake_destroy(b);
+        sg_world_destroy(w);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -556,6 +673,7 @@ int main(void)
         cmocka_unit_test(test_bake_glossy_white_furnace_and_lookup),
         cmocka_unit_test(test_bake_deterministic_across_threads),
         cmocka_unit_test(test_bake_deterministic_across_threads_hybrid),
+        cmocka_unit_test(test_bake_lookup_keep_facing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
