@@ -38,6 +38,7 @@
 #include <assert.h>
 #include <math.h>
 #include <omp.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "bake/bake_job_int.h"
@@ -515,16 +516,23 @@ void sg_bake_lookup16(const sg_bake *b, const sg_world *w, const sg_world_hit *h
         const float *E = b->E[h[r].model];
         for (int j = 0; j < n[r]; ++j) {
             const uint32_t i = ids[r][j];
-            /* both ends: a 48-byte record straddles two lines at one
-             * offset in four */
-            __builtin_prefetch(E + SG_BAKE_SPLAT_FLOATS * (size_t)i);
-            __builtin_prefetch(E + SG_BAKE_SPLAT_FLOATS * (size_t)i + (SG_BAKE_SPLAT_FLOATS - 1));
+            /* Both ends where a 48-byte record straddles two lines (at one
+             * offset in four), and only what the lookup reads: the misses
+             * of a block, some 16 x 3 sites x 5 lines, outnumber what a core
+             * keeps in flight, so a prefetch of a line already asked for,
+             * or of colours a white mesh never reads, stalls the ones that
+             * count (bench_view_split, hybrid: the colours' prefetches took
+             * 4-7% of the view, docs/bench_view.md stop 29). */
+            const float *rec = E + SG_BAKE_SPLAT_FLOATS * (size_t)i, *end = rec + (SG_BAKE_SPLAT_FLOATS - 1);
+            __builtin_prefetch(rec);
+            if (((uintptr_t)rec ^ (uintptr_t)end) >> 6)
+                __builtin_prefetch(end);
             if (i >= ps->count)
                 continue; /* not a site of the table (a point's own colour) */
             __builtin_prefetch(&ps->nx[i]);
             __builtin_prefetch(&ps->ny[i]);
             __builtin_prefetch(&ps->nz[i]);
-            if (ps->ar) {
+            if (ps->ar && !ps->white) {
                 __builtin_prefetch(&ps->ar[i]);
                 __builtin_prefetch(&ps->ag[i]);
                 __builtin_prefetch(&ps->ab[i]);

@@ -166,7 +166,7 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
     out->data = d;
     out->vertex_count = nv;
     out->view = (sg_sites){.count = n, .px = px, .py = py, .pz = pz, .nx = nx, .ny = ny, .nz = nz,
-                           .radius = rad, .ar = ar, .ag = ag, .ab = ab};
+                           .radius = rad, .ar = ar, .ag = ag, .ab = ab, .white = !h->vcolor};
     return SG_OK;
 }
 

@@ -34,6 +34,10 @@ typedef struct sg_sites {
     const uint8_t *unsampled;  /* per site, nonzero: never a sample point of
                                   a bake, only interpolated to (a site off
                                   the surface, bake/transport.h); NULL: none */
+    int white;                 /* 1: every colour is (1, 1, 1) and the
+                                  surface's albedo of a hit never reads ar,
+                                  ag, ab (a mesh without vertex colours), so
+                                  a lookup need not fetch them            */
 } sg_sites;
 
 static inline sg_vec3 sg_sites_position(const sg_sites *s, size_t i)
