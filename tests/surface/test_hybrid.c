@@ -1229,6 +1229,13 @@ static void test_hybrid_albedo_is_site_blend(void **state)
         }
         sg_scene *sc = mesh_scene(&m, 2.0f);
         const sg_sites *st = sg_scene_sites(sc);
+        /* white (the lookup then fetches no colours): only without vertex
+         * colours, and then every site's colour is 1 */
+        assert_int_equal(st->white, !coloured);
+        for (size_t i = 0; st->white && i < st->count; ++i)
+            if (st->ar[i] != 1.0f || st->ag[i] != 1.0f || st->ab[i] != 1.0f)
+                fail_msg("white sites, site %zu: colour %g %g %g", i, (double)st->ar[i], (double)st->ag[i],
+                         (double)st->ab[i]);
         uint64_t rng = 5;
         size_t kinds[3] = {0}; /* misses, triangle hits, LOD hits */
         for (int i = 0; i < 20000; ++i) {
