@@ -1011,26 +1011,6 @@ static inline void normalize16(sg_v16 *x, sg_v16 *y, sg_v16 *z)
     *z = sg_v16_select(big, sg_v16_mul(*z, s), zero);
 }
 
-/* sg_oct_decode of sixteen codes whose halves qx, qy were converted to
- * float ((float)(int16_t) of each half, exact), lane by lane. */
-static inline void oct_decode16(const float *qx, const float *qy, sg_v16 *x, sg_v16 *y, sg_v16 *z)
-{
-    const sg_v16 one = sg_v16_set1(1.0f), zero = sg_v16_set1(0.0f), minus = sg_v16_set1(-1.0f);
-    const sg_v16 k = sg_v16_set1(1.0f / 32767.0f);
-    sg_v16 a = sg_v16_mul(sg_v16_load(qx), k), b = sg_v16_mul(sg_v16_load(qy), k);
-    const sg_v16 c = sg_v16_sub(sg_v16_sub(one, sg_v16_abs(a)), sg_v16_abs(b));
-    const unsigned fold = sg_v16_lt(c, zero);
-    const sg_v16 fa = sg_v16_mul(sg_v16_sub(one, sg_v16_abs(b)), sg_v16_select(sg_v16_lt(a, zero), minus, one));
-    const sg_v16 fb = sg_v16_mul(sg_v16_sub(one, sg_v16_abs(a)), sg_v16_select(sg_v16_lt(b, zero), minus, one));
-    a = sg_v16_select(fold, fa, a);
-    b = sg_v16_select(fold, fb, b);
-    const sg_v16 inv = sg_v16_div(one, sg_v16_sqrt(sg_v16_add(sg_v16_add(sg_v16_mul(a, a), sg_v16_mul(b, b)),
-                                                             sg_v16_mul(c, c))));
-    *x = sg_v16_mul(a, inv);
-    *y = sg_v16_mul(b, inv);
-    *z = sg_v16_mul(c, inv);
-}
-
 /* write_hit for the rays of `lanes` whose best is a triangle, across the
  * lanes: the hit point, the geometric normal and the interpolated shading
  * normal by write_hit's expressions in its order (v16.h: no fused
@@ -1051,7 +1031,8 @@ static unsigned write_hits16(const sg_hybrid *h, const best *bst, unsigned lanes
     /* the lanes' inputs, one array per quantity; a lane outside tri is a
      * copy of the first in it (computed, never read; no zero-fill, whose
      * string store cost more than the copies) */
-    _Alignas(64) float P[9][16], B1[16], B2[16], Q[6][16];
+    _Alignas(64) float P[9][16], B1[16], B2[16];
+    uint32_t code[3][16]; /* the vertices' normals, oct.h */
     const uint32_t *vn = h->vnormal;
     const int f = __builtin_ctz(tri);
     for (int r = 0; r < 16; ++r) {
@@ -1063,11 +1044,8 @@ static unsigned write_hits16(const sg_hybrid *h, const best *bst, unsigned lanes
             P[3 * q][r] = x[0];
             P[3 * q + 1][r] = x[1];
             P[3 * q + 2][r] = x[2];
-            if (vn) {
-                const uint32_t e = vn[v[q]];
-                Q[2 * q][r] = (float)(int16_t)(uint16_t)(e & 0xFFFFu);
-                Q[2 * q + 1][r] = (float)(int16_t)(uint16_t)(e >> 16);
-            }
+            if (vn)
+                code[q][r] = vn[v[q]];
         }
         B1[r] = bst[src].b1;
         B2[r] = bst[src].b2;
@@ -1102,11 +1080,11 @@ static unsigned write_hits16(const sg_hybrid *h, const best *bst, unsigned lanes
     sg_v16 gz = sg_v16_sub(sg_v16_mul(e1x, e2y), sg_v16_mul(e1y, e2x));
     normalize16(&gx, &gy, &gz);
     sg_v16 sx = gx, sy = gy, sz = gz;
-    if (h->vnormal) {
+    if (vn) {
         /* ns = normalize(n0 b0 + n1 b1 + n2 b2), ng where that is zero */
-        sg_v16 nx[3], ny[3], nz[3]; /* Q was filled (vn) */
+        sg_v16 nx[3], ny[3], nz[3];
         for (int q = 0; q < 3; ++q)
-            oct_decode16(Q[2 * q], Q[2 * q + 1], &nx[q], &ny[q], &nz[q]);
+            sg_oct_decode16(code[q], &nx[q], &ny[q], &nz[q]);
         sg_v16 x = sg_v16_add(sg_v16_add(sg_v16_mul(nx[0], b0), sg_v16_mul(nx[1], b1)), sg_v16_mul(nx[2], b2));
         sg_v16 y = sg_v16_add(sg_v16_add(sg_v16_mul(ny[0], b0), sg_v16_mul(ny[1], b1)), sg_v16_mul(ny[2], b2));
         sg_v16 z = sg_v16_add(sg_v16_add(sg_v16_mul(nz[0], b0), sg_v16_mul(nz[1], b1)), sg_v16_mul(nz[2], b2));

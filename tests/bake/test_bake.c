@@ -642,6 +642,9 @@ static void test_bake_lookup_keep_facing(void **state)
                             ++renorm;
                         } else if (away < n) {
                             ++as_is;
+                            /* 0.1: above the sphere's emission alone
+                             * (0.01 + 0.02 + 0.03), which is what the old
+                             * rule's zero weights returned */
                             if (h[r].model == 0 && sg_v3_dot(wo[r], h[r].hit.n) >= 0.0f &&
                                 !(got[r].x + got[r].y + got[r].z > 0.1f))
                                 fail_msg("%s, view %d, block (%d, %d), ray %d: the only weighted sites face away "

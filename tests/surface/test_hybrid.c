@@ -92,6 +92,7 @@
 #include "core/alloc.h"
 #include "points/mesh_shapes.h"
 #include "accel/sphere_bundle.h"
+#include "math/oct.h"
 #include "math/triangle.h"
 #include "surface/hybrid.h"
 #include "surface/hybrid_int.h" /* the bundles, for the kernel comparison */
@@ -685,6 +686,39 @@ static void test_hybrid_kernels_agree(void **state)
 {
     (void)state;
     uint64_t rng = 99;
+#if SG_V16_SIMD
+    /* sg_oct_decode16 (a packet's shading normals) against sg_oct_decode:
+     * encodings of random unit vectors, random codes, the square's edges,
+     * axes and corners, and codes on the fold (|x| + |y| = 1, z = 0) */
+    for (int n = 0; n < 4000; ++n) {
+        uint32_t code[16];
+        for (int i = 0; i < 16; ++i) {
+            const int16_t edge[7] = {0, 1, -1, 16383, -16384, 32767, -32767};
+            /* two draws of 16 bits each (a float draw has 24 significant bits) */
+            const uint32_t lo = (uint32_t)(sg_test_rand01(&rng) * 65536.0f), hi = (uint32_t)(sg_test_rand01(&rng) * 65536.0f);
+            const uint32_t u = lo | hi << 16;
+            const int16_t k = (int16_t)(lo & 0x7FFFu), sx = hi & 1u ? -1 : 1, sy = hi & 2u ? -1 : 1;
+            if (n % 4 == 0)
+                code[i] = sg_oct_encode(sg_test_random_dir(&rng));
+            else if (n % 4 == 1)
+                code[i] = u;
+            else if (n % 4 == 2)
+                code[i] = (uint32_t)(uint16_t)edge[lo % 7] | (uint32_t)(uint16_t)edge[hi % 7] << 16;
+            else /* on the fold: |x| + |y| = 32767, where z rounds to 0 or just past it */
+                code[i] = (uint32_t)(uint16_t)(int16_t)(sx * k) | (uint32_t)(uint16_t)(int16_t)(sy * (32767 - k)) << 16;
+        }
+        sg_v16 x, y, z;
+        sg_oct_decode16(code, &x, &y, &z);
+        _Alignas(64) float gx[16], gy[16], gz[16];
+        sg_v16_store(gx, x), sg_v16_store(gy, y), sg_v16_store(gz, z);
+        for (int i = 0; i < 16; ++i) {
+            const sg_vec3 want = sg_oct_decode(code[i]), got = sg_v3(gx[i], gy[i], gz[i]);
+            if (memcmp(&want, &got, sizeof want) != 0)
+                fail_msg("oct code %08x: sg_oct_decode %.9g %.9g %.9g, sg_oct_decode16 %.9g %.9g %.9g", code[i],
+                         (double)want.x, (double)want.y, (double)want.z, (double)got.x, (double)got.y, (double)got.z);
+        }
+    }
+#endif
     /* Triangles: random, and some sharing vertices with the ray's origin
      * axis so that edge functions come out exactly 0 (the fallback). */
     size_t differ = 0, hits = 0;
