@@ -457,7 +457,8 @@ static sg_status parse_material(const ctx *c, const cJSON *obj, const char *jp, 
 static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, sg_scene_desc *d)
 {
     static const char *const keys[] = {"model", "kernel", "samples_per_cell", "refinements", "iso_tolerance",
-                                       "iso_max_depth", "iso_leaf_radii", "iso_lod", "hybrid_lod"};
+                                       "iso_max_depth", "iso_leaf_radii", "iso_lod", "hybrid_lod",
+                                       "hybrid_site_spacing"};
     static const char *const models[] = {"mls", "disk", "iso", "hybrid"};
     static const int model_values[] = {SG_SURFACE_MLS, SG_SURFACE_DISK, SG_SURFACE_ISO, SG_SURFACE_HYBRID};
     static const range TOLERANCE = {0.0, 10.0, 1, 0};
@@ -492,6 +493,12 @@ static sg_status parse_surface(const ctx *c, const cJSON *obj, const char *jp, s
         float lod = 0.0f;
         st = get_float(c, obj, jp, "hybrid_lod", LOD_PIXELS, &lod);
         d->hybrid_lod = lod > 0.0f ? lod : -1.0f;
+    }
+    if (st == SG_OK && member(obj, "hybrid_site_spacing")) { /* 0 in the file: at vertices only */
+        static const range SPACING = {0.0, 1e6, 0, 0};
+        float s = 0.0f;
+        st = get_float(c, obj, jp, "hybrid_site_spacing", SPACING, &s);
+        d->hybrid_site_spacing = s > 0.0f ? s : -1.0f;
     }
     const cJSON *r = member(obj, "refinements");
     if (st == SG_OK && r) {
@@ -1022,6 +1029,16 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
                 h_u64(&h, (uint64_t)(int64_t)m->surface.iso_max_depth);
                 if (m->surface.iso_leaf_radii != 0.0f) /* earlier ISO bakes keep their hashes */
                     h_f32(&h, m->surface.iso_leaf_radii);
+            }
+            /* Light sites on lattices (hybrid.h): the builtin ground and room
+             * changed from gridded meshes to a few triangles with lattices
+             * (stop 30), and their bakes' sites with them; hybrid mesh files
+             * without a spacing keep their hashes. */
+            if (m->surface.model == SG_SURFACE_HYBRID &&
+                (m->kind == SG_SCENE_MODEL_GROUND || m->kind == SG_SCENE_MODEL_ROOM ||
+                 m->surface.hybrid_site_spacing != 0.0f)) {
+                h_u64(&h, 0x4c415454u); /* "LATT" */
+                h_f32(&h, m->surface.hybrid_site_spacing);
             }
         }
     }

@@ -66,6 +66,13 @@
  *                                       (camera rays only: a bake stays valid)
  *           "hybrid_lod": 1,            [0, 64] pixels, 0 = full detail; not hashed
  *                                       (camera rays only: a bake stays valid)
+ *           "hybrid_site_spacing": s,   [0, 1e6] world units: triangles larger
+ *                                       than s carry lattices of light sites
+ *                                       (hybrid.h); absent: none on mesh files,
+ *                                       the builtin ground and room as a few
+ *                                       triangles with lattices at their
+ *                                       "points" spacing; 0: vertices only, the
+ *                                       builtins as gridded meshes (hashed)
  *           "refinements": {"shrink": true, "encourage": true, "collapse": true}
  *         }
  *       } ],

@@ -93,6 +93,9 @@ static cJSON *model_json(const sg_scene_model *m)
         cJSON_AddItemToObject(sur, "iso_lod", num(m->surface.iso_lod > 0.0f ? m->surface.iso_lod : 0.0f));
     if (m->surface.hybrid_lod != 0.0f) /* the file's 0 is full detail, the desc's negative */
         cJSON_AddItemToObject(sur, "hybrid_lod", num(m->surface.hybrid_lod > 0.0f ? m->surface.hybrid_lod : 0.0f));
+    if (m->surface.hybrid_site_spacing != 0.0f) /* the file's 0 is vertices only, the desc's negative */
+        cJSON_AddItemToObject(sur, "hybrid_site_spacing",
+                              num(m->surface.hybrid_site_spacing > 0.0f ? m->surface.hybrid_site_spacing : 0.0f));
     cJSON *r = cJSON_AddObjectToObject(sur, "refinements");
     cJSON_AddBoolToObject(r, "shrink", !(m->surface.kd_disable & SG_KD_NO_SHRINK));
     cJSON_AddBoolToObject(r, "encourage", !(m->surface.kd_disable & SG_KD_NO_ENCOURAGE));

@@ -75,15 +75,23 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
 }
 
 /* SG_SURFACE_HYBRID: the model as triangles. Files and the bunny as
- * read; the builtins as meshes of about the splats' resolution, since the
- * bake stores light at vertices: "ground" a 30 x 30 square of
- * side x side cells (side = round(sqrt(points)), default 128), "sphere"
- * the unit sphere with rings = round(sqrt(points / 2)) bands (default
- * 224: 100k triangles), "room" as points/room.h builds it in cells of
- * sqrt(162 m^2 / points) (default 250k: cells of 0.025): in each case
- * about `points` vertices, as many light sites as splats. */
-static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh *out, sg_error *err)
+ * read; the builtins with about `points` light sites, as many as splats:
+ * "ground" a 30 x 30 square with sites side x side cells apart (side =
+ * round(sqrt(points)), default 128), "sphere" the unit sphere with
+ * rings = round(sqrt(points / 2)) bands (default 224: 100k triangles),
+ * "room" as points/room.h builds it with sites sqrt(162 m^2 / points)
+ * apart (default 250k: 0.025). The flat builtins are a few triangles (the
+ * ground 2, the room 2 a rectangle) whose light sites are lattices at that
+ * spacing (hybrid.h site_spacing; *spacing is set): a ray crosses two
+ * triangles, not a hierarchy of a grid's 32k, and the light has the
+ * grid's resolution. A negative hybrid_site_spacing in the surface desc
+ * asks for the gridded meshes of before instead, light at their vertices
+ * (*spacing stays 0): the A/B of docs/hybrid.md. */
+static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh *out, float *spacing, sg_error *err)
 {
+    const int gridded = m->surface.hybrid_site_spacing < 0.0f;
+    const float own = m->surface.hybrid_site_spacing; /* > 0: the file's */
+    *spacing = 0.0f;
     switch (m->kind) {
     case SG_SCENE_MODEL_FILE:
         return sg_mesh_read(m->path, out, err);
@@ -94,7 +102,10 @@ static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh 
     }
     case SG_SCENE_MODEL_GROUND: {
         int side = m->points.points > 0 ? (int)fmin(4096.0, fmax(1.0, floor(sqrt((double)m->points.points) + 0.5))) : 128;
-        return sg_mesh_make_plane(side, 15.0f, out, err);
+        if (gridded)
+            return sg_mesh_make_plane(side, 15.0f, out, err);
+        *spacing = own > 0.0f ? own : (float)(30.0 / side); /* 30 / 128 = 0.234375 exactly */
+        return sg_mesh_make_plane(1, 15.0f, out, err);
     }
     case SG_SCENE_MODEL_SPHERE: {
         int rings = m->points.points > 0 ? (int)fmin(4096.0, fmax(2.0, floor(sqrt(m->points.points / 2.0) + 0.5)))
@@ -105,12 +116,24 @@ static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh 
         /* about `points` vertices over the walls' ~162 m^2 (inside 72,
          * outside 90) */
         double n = m->points.points > 0 ? (double)m->points.points : 250000.0;
-        sg_room_desc rd = {.cell = (float)fmax(0.005, sqrt(162.0 / n))};
-        return sg_room_mesh(&rd, out, err);
+        const float cell = (float)fmax(0.005, sqrt(162.0 / n));
+        if (gridded) {
+            sg_room_desc rd = {.cell = cell};
+            return sg_room_mesh(&rd, out, err);
+        }
+        *spacing = own > 0.0f ? own : cell;
+        return sg_room_mesh(NULL, out, err); /* two triangles a rectangle */
     }
     default:
         return sg_error_set(err, SG_ERR_INVALID_ARG, "$.models[%zu]: unknown model kind %d", index, (int)m->kind);
     }
+}
+
+/* The largest factor by which t stretches a length: a builtin's site
+ * spacing in the world (so a uniformly scaled ground keeps its lattice). */
+static float scale_of(const sg_scene_transform *t)
+{
+    return fmaxf(t->scale.x, fmaxf(t->scale.y, t->scale.z));
 }
 
 static void transform_mesh(const sg_scene_transform *t, sg_mesh *mesh)
@@ -280,14 +303,17 @@ static sg_status make_model_scene(const sg_scene_file *sf, size_t i, const sg_wo
     sg_status st;
     if (m->surface.model == SG_SURFACE_HYBRID) {
         sg_mesh mesh = {0};
+        float spacing = 0.0f;
         sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): reading triangles", i + 1, sf->model_count, model_label(m));
-        if ((st = load_model_mesh(m, i, &mesh, err)) != SG_OK)
+        if ((st = load_model_mesh(m, i, &mesh, &spacing, err)) != SG_OK)
             return st;
         transform_mesh(&m->transform, &mesh);
         sg_world__say(d, SG_WORLD_STAGE, "model %zu of %zu (%s): building the hybrid hierarchy of %zu triangles", i + 1,
             sf->model_count, model_label(m), mesh.triangle_count);
-        st = sg_scene_create_mesh(&m->surface, &mesh, m->kind == SG_SCENE_MODEL_FILE ? m->path : model_label(m),
-                                  out, err);
+        sg_scene_desc sd = m->surface;
+        if (spacing > 0.0f) /* a builtin's lattice spacing, in the model's frame */
+            sd.hybrid_site_spacing = spacing * scale_of(&m->transform);
+        st = sg_scene_create_mesh(&sd, &mesh, m->kind == SG_SCENE_MODEL_FILE ? m->path : model_label(m), out, err);
         sg_mesh_free(&mesh);
         return st;
     }

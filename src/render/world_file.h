@@ -73,7 +73,7 @@
 #include "io/scene_file.h"
 #include "render/world.h"
 
-#define SG_WORLD_BUILDER_VERSION 3u /* raise when a build changes its output */
+#define SG_WORLD_BUILDER_VERSION 4u /* raise when a build changes its output */
 #define SG_WORLD_MAX_MODELS 160u    /* 25 sections per model (MLS) in 4096   */
 
 /* The scene hash a world file of sf carries (see above). */

@@ -62,6 +62,7 @@ void sg_hybrid_destroy(sg_hybrid *h)
     sg_free(h->pos);
     sg_free(h->vnormal);
     sg_free(h->vcolor);
+    sg_free(h->lattice);
     sg_free(h);
 }
 
@@ -182,6 +183,117 @@ static sg_status make_normals(sg_hybrid *h, const sg_mesh *m, const uint32_t *tr
     return SG_OK;
 }
 
+/* Lattice sites of a triangle: more than this many subdivisions means a
+ * spacing absurdly small for the triangle (n^2 / 2 sites on one). */
+#define LATTICE_MAX_N 8192u
+
+/* The lattices of desc.site_spacing (hybrid_int.h invariant 4): for each
+ * traced triangle in leaf order whose second-longest edge e exceeds the
+ * spacing,
+ * n = ceil(e / spacing) subdivisions and (n + 1)(n + 2) / 2 new vertices
+ * appended after the mesh's, their positions, normals and colours the
+ * triangle's vertices' interpolated in double. Triangles own disjoint
+ * ranges, so the fill runs in parallel and gives the same bits on any
+ * thread count. */
+static sg_status make_lattice(sg_hybrid *h, float spacing, const char *name, sg_error *err)
+{
+    const size_t nt = h->info.triangle_count, nv = h->vertex_count;
+    size_t total = 0, with = 0;
+    uint32_t *lat = sg_alloc_array(nt, 2 * sizeof *lat);
+    if (!lat)
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu lattices", name, nt);
+    for (size_t i = 0; i < nt; ++i) {
+        const uint32_t *v = h->tri + 3 * i;
+        double l[3];
+        for (int k = 0; k < 3; ++k) {
+            const float *a = h->pos + 3 * (size_t)v[k], *b = h->pos + 3 * (size_t)v[(k + 1) % 3];
+            double d2 = 0.0;
+            for (int q = 0; q < 3; ++q)
+                d2 += ((double)b[q] - a[q]) * ((double)b[q] - a[q]);
+            l[k] = sqrt(d2);
+        }
+        /* the second-longest edge: a gridded rectangle's cell side for its
+         * right triangles; the longest small edge is then below 2 spacings
+         * (triangle inequality) */
+        const double e = fmax(fmin(l[0], l[1]), fmin(fmax(l[0], l[1]), l[2]));
+        /* e / spacing within a few float roundings of an integer k (a
+         * scaled ground's side over its cell) gives k, not k + 1 */
+        double n = e > (double)spacing ? ceil(e / (double)spacing * (1.0 - 1e-6)) : 0.0;
+        n = n >= 2.0 ? n : 0.0; /* one row: the triangle's own vertices */
+        if (n > (double)LATTICE_MAX_N) {
+            sg_free(lat);
+            return sg_error_set(err, SG_ERR_INVALID_ARG,
+                                "%s: site spacing %g splits triangle %u (edge %g) into %.0f lattice rows, "
+                                "more than %u",
+                                name, (double)spacing, h->tri_id[i], e, n, LATTICE_MAX_N);
+        }
+        const size_t sites = n > 0.0 ? ((size_t)n + 1) * ((size_t)n + 2) / 2 : 0;
+        lat[2 * i] = (uint32_t)(nv + total < SG_INVALID_ID ? nv + total : 0);
+        lat[2 * i + 1] = (uint32_t)n;
+        total += sites;
+        with += sites > 0;
+        if (nv + total >= SG_INVALID_ID) {
+            sg_free(lat);
+            return sg_error_set(err, SG_ERR_INVALID_ARG,
+                                "%s: site spacing %g makes more than %u vertices and lattice sites", name,
+                                (double)spacing, SG_INVALID_ID - 1u);
+        }
+    }
+    if (total == 0) {
+        sg_free(lat);
+        return SG_OK;
+    }
+    const size_t all = nv + total;
+    if (!sg_realloc_array((void **)&h->pos, nv, all, 3 * sizeof *h->pos) ||
+        (h->vnormal && !sg_realloc_array((void **)&h->vnormal, nv, all, sizeof *h->vnormal)) ||
+        (h->vcolor && !sg_realloc_array((void **)&h->vcolor, nv, all, 3 * sizeof *h->vcolor))) {
+        sg_free(lat);
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu lattice sites", name, total);
+    }
+    const ptrdiff_t nti = (ptrdiff_t)nt;
+#pragma omp parallel for schedule(dynamic, 16)
+    for (ptrdiff_t t = 0; t < nti; ++t) {
+        const uint32_t n = lat[2 * t + 1], first = lat[2 * t];
+        if (n == 0)
+            continue;
+        const uint32_t *v = h->tri + 3 * (size_t)t;
+        const float *p[3] = {h->pos + 3 * (size_t)v[0], h->pos + 3 * (size_t)v[1], h->pos + 3 * (size_t)v[2]};
+        sg_vec3 nn[3] = {sg_v3(0, 0, 0), sg_v3(0, 0, 0), sg_v3(0, 0, 0)};
+        if (h->vnormal)
+            for (int k = 0; k < 3; ++k)
+                nn[k] = sg_oct_decode(h->vnormal[v[k]]);
+        for (uint32_t i = 0; i <= n; ++i)
+            for (uint32_t j = 0; i + j <= n; ++j) {
+                const double w1 = (double)i / n, w2 = (double)j / n, w0 = 1.0 - w1 - w2;
+                const size_t id = sg_hybrid__lattice_id(first, n, i, j);
+                for (int q = 0; q < 3; ++q)
+                    h->pos[3 * id + (size_t)q] = (float)(w0 * p[0][q] + w1 * p[1][q] + w2 * p[2][q]);
+                if (h->vnormal) {
+                    double m[3] = {w0 * nn[0].x + w1 * nn[1].x + w2 * nn[2].x,
+                                   w0 * nn[0].y + w1 * nn[1].y + w2 * nn[2].y,
+                                   w0 * nn[0].z + w1 * nn[1].z + w2 * nn[2].z};
+                    double l = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+                    /* opposite vertex normals cancel only on a fin (check_mesh's
+                     * non-manifold case): then the first vertex's */
+                    h->vnormal[id] = l > 0.0 ? sg_oct_encode(sg_v3((float)(m[0] / l), (float)(m[1] / l),
+                                                                   (float)(m[2] / l)))
+                                             : h->vnormal[v[0]];
+                }
+                if (h->vcolor)
+                    for (int q = 0; q < 3; ++q)
+                        h->vcolor[3 * id + (size_t)q] =
+                            (float)(w0 * h->vcolor[3 * (size_t)v[0] + (size_t)q] +
+                                    w1 * h->vcolor[3 * (size_t)v[1] + (size_t)q] +
+                                    w2 * h->vcolor[3 * (size_t)v[2] + (size_t)q]);
+            }
+    }
+    h->lattice = lat;
+    h->vertex_count = all;
+    h->info.lattice_triangles = with;
+    h->info.lattice_sites = total;
+    return SG_OK;
+}
+
 sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_hybrid **out, sg_error *err)
 {
     double t_start = omp_get_wtime();
@@ -200,6 +312,9 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
                             SG_STREE_MAX_LEAF);
     if (d.threads < 0)
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: threads %d is negative", name, d.threads);
+    if (!(d.site_spacing >= 0.0f) || !isfinite(d.site_spacing))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: site spacing %g is not a finite length >= 0", name,
+                            (double)d.site_spacing);
     uint32_t *traced = NULL, *ctri = NULL;
     size_t count = 0;
     sg_status st = check_mesh(&d, mesh, &traced, &count, err); /* messages name d.name */
@@ -265,6 +380,9 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
         memcpy(h->vcolor, mesh->colors, nv * 3 * sizeof *h->vcolor);
     sg_free(ctri);
     ctri = NULL;
+    h->info.triangle_count = count; /* make_lattice reads it */
+    if (d.site_spacing > 0.0f && (st = make_lattice(h, d.site_spacing, name, err)) != SG_OK)
+        goto fail;
 
     float extent = fmaxf(fmaxf(fabsf(bounds.lo.x), fabsf(bounds.hi.x)),
                          fmaxf(fmaxf(fabsf(bounds.lo.y), fabsf(bounds.hi.y)),
@@ -277,7 +395,7 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
     in->input_triangles = mesh->triangle_count;
     in->triangle_count = count;
     in->degenerate_count = mesh->triangle_count - count;
-    in->vertex_count = nv;
+    in->vertex_count = h->vertex_count; /* lattice sites included */
     in->node_count = h->tree.node_count;
     in->leaf_count = h->tree.leaf_count;
     in->node_slots = h->tree.bundle_count * W;
@@ -286,12 +404,13 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
     in->depth = h->tree.depth;
     in->memory_nodes = h->tree.bundle_count * sizeof(sg_stree_bundle);
     in->memory_triangles = count * (3 * sizeof *h->tri + sizeof *h->tri_id);
-    in->memory_vertices = nv * 3 * sizeof *h->pos;
-    in->memory_normals = h->vnormal ? nv * sizeof *h->vnormal : 0;
-    in->memory_colors = (h->vcolor ? nv * 3 * sizeof(float) : 0) +
+    in->memory_vertices = h->vertex_count * 3 * sizeof *h->pos;
+    in->memory_normals = h->vnormal ? h->vertex_count * sizeof *h->vnormal : 0;
+    in->memory_lattice = h->lattice ? count * 2 * sizeof *h->lattice : 0;
+    in->memory_colors = (h->vcolor ? h->vertex_count * 3 * sizeof(float) : 0) +
                         (h->tree.colors ? in->node_slots * 3 * sizeof(float) : 0);
     in->memory_bytes = sizeof *h + in->memory_nodes + in->memory_triangles + in->memory_vertices +
-                       in->memory_normals + in->memory_colors;
+                       in->memory_normals + in->memory_colors + in->memory_lattice;
     in->bytes_per_triangle = (double)in->memory_bytes / (double)count;
     in->bounds = bounds;
     sg_free(traced);
@@ -362,7 +481,13 @@ int sg_hybrid_hit_sites(const sg_hybrid *h, const sg_hybrid_hit *hit, uint32_t *
     }
     if (hit->triangle == SG_INVALID_ID)
         return 0;
-    return sg_hybrid__triangle_sites(hit->vertex, hit->b1, hit->b2, ids, weights, max);
+    uint32_t v[3];
+    float b1, b2;
+    if (hit->slot < h->info.triangle_count)
+        sg_hybrid__light_triangle(h, hit->slot, hit->vertex, hit->b1, hit->b2, v, &b1, &b2);
+    else /* a hit made by hand, without its slot: a lattice can not be read */
+        memcpy(v, hit->vertex, sizeof v), b1 = hit->b1, b2 = hit->b2;
+    return sg_hybrid__triangle_sites(v, b1, b2, ids, weights, max);
 }
 
 int sg_hybrid_hit_color(const sg_hybrid *h, const sg_hybrid_hit *hit, sg_vec3 *rgb)
@@ -437,5 +562,7 @@ uint64_t sg_hybrid_layout_hash(const sg_hybrid *h)
         x = fnv(x, h->vnormal, h->vertex_count * sizeof *h->vnormal);
     if (h->vcolor)
         x = fnv(x, h->vcolor, h->vertex_count * 3 * sizeof *h->vcolor);
+    if (h->lattice)
+        x = fnv(x, h->lattice, h->info.triangle_count * 2 * sizeof *h->lattice);
     return x;
 }

@@ -48,11 +48,23 @@
  * its triangles) are ignored. A real occluder that close, at a crease or a
  * concave corner, turns by more than 25 degrees and is still hit.
  *
- * Light sites (for a bake): the mesh's vertices, ids 0 .. vertex_count - 1,
+ * Light sites (for a bake): the mesh's vertices, then the lattice sites,
+ * ids 0 .. vertex_count - 1 (sg_hybrid_info.vertex_count counts both),
  * followed by the hierarchy's node slots, ids vertex_count + node id. A
  * triangle hit interpolates its three vertices with its barycentrics
  * (continuous across shared edges, so no seams); a level-of-detail hit
- * reads its node alone. sg_hybrid_hit_sites gives ids and weights summing
+ * reads its node alone. With desc.site_spacing s > 0 a triangle whose
+ * second-longest edge e exceeds s carries its own lattice of sites
+ * instead of its vertices: the points of barycentrics (i / n, j / n),
+ * i + j <= n, n = ceil(e / s) (so the small triangles' edges are within s
+ * but the one along the longest edge, which is within 2 s; a right
+ * triangle of legs e gets cells of e / n exactly), each cell split in two
+ * as a gridded plane's cells are; a hit there interpolates the three sites of its small triangle.
+ * So a big flat triangle (a ground, a wall: a few triangles to trace)
+ * holds its light at the resolution the bake needs, and a plane made of
+ * two such triangles reads its light as the same plane made of n x n
+ * cells would. Lattice sites on an edge two triangles share are computed
+ * from that edge on each side (equal positions to rounding). sg_hybrid_hit_sites gives ids and weights summing
  * to 1. Node ids are dense in [0, node_slots); a few slots are empty
  * (sg_hybrid_site returns 0 for them) so that ids stay a plain index.
  *
@@ -95,6 +107,10 @@ typedef struct sg_hybrid_desc {
     sg_hybrid_traversal traversal; /* default SG_HYBRID_TRAVERSE_STACK              */
     int leaf_max;                  /* triangles per leaf, 1..8; default 8           */
     int threads;                   /* build threads; 0 = OpenMP default             */
+    float site_spacing;            /* light sites about this far apart: a triangle
+                                      whose second-longest edge is longer gets a
+                                      lattice of light sites (header); 0 = the
+                                      vertices are the only point sites (default) */
     const char *name;              /* names the mesh in messages (a file path);
                                       default "mesh"                              */
 } sg_hybrid_desc;
@@ -178,7 +194,9 @@ typedef struct sg_hybrid_info {
     size_t input_triangles;    /* triangles in the mesh                          */
     size_t triangle_count;     /* triangles traced (input minus degenerate)      */
     size_t degenerate_count;   /* zero-area triangles left out (never hit)       */
-    size_t vertex_count;
+    size_t vertex_count;       /* mesh vertices + lattice sites                  */
+    size_t lattice_triangles;  /* triangles with a lattice of light sites        */
+    size_t lattice_sites;      /* their sites (counted in vertex_count)          */
     size_t node_count;         /* hierarchy nodes (inner + leaf)                 */
     size_t leaf_count;
     size_t node_slots;         /* node ids are < node_slots                      */
@@ -191,6 +209,7 @@ typedef struct sg_hybrid_info {
     size_t memory_vertices;    /* positions                                      */
     size_t memory_normals;     /* vertex normals (oct, 4 bytes each)             */
     size_t memory_colors;      /* vertex and node colours                        */
+    size_t memory_lattice;     /* lattice first site and size per triangle       */
     double bytes_per_triangle; /* memory_bytes / triangle_count                  */
     double build_seconds;      /* wall time of sg_hybrid_create                  */
     sg_aabb bounds;            /* box of the traced triangles' vertices          */

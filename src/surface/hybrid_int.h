@@ -8,7 +8,14 @@
  *  2. pos holds vertex_count finite positions; vnormal, when not NULL,
  *     vertex_count oct-encoded unit normals (oct.h);
  *  3. tree satisfies sphere_tree.h's invariants over exactly these
- *     triangles (tree.order is released once tri/tri_id are made).
+ *     triangles (tree.order is released once tri/tri_id are made);
+ *  4. a triangle with lattice {first, n}, n >= 1, owns the vertex ids
+ *     first .. first + (n + 1)(n + 2) / 2 - 1, above every mesh vertex
+ *     and no other triangle's: its lattice sites, the points of
+ *     barycentric (i / n, j / n), i + j <= n, weights of v[1] and v[2],
+ *     row i first (sg_hybrid__lattice_id). They are vertices to every
+ *     site query (position, normal, colour interpolated over the
+ *     triangle) but no traced triangle names them.
  * A hierarchy loaded from a world file (scene_store.c) has been checked
  * for everything a traversal indexes with (child words, leaf ranges,
  * vertex ids, depth) and for NaN, not for invariant 1's tightness.
@@ -27,7 +34,11 @@ struct sg_hybrid {
     float *pos;            /* 3 per vertex                                   */
     uint32_t *vnormal;     /* per vertex, oct.h; NULL with flat shading      */
     float *vcolor;         /* 3 per vertex; NULL when the mesh had none      */
-    size_t vertex_count;
+    uint32_t *lattice;     /* 2 per traced triangle, leaf order: its first
+                              lattice site and its subdivisions n (0: its
+                              own vertices are its sites); NULL when no
+                              triangle has a lattice (invariant 4)          */
+    size_t vertex_count;   /* the mesh's vertices, then the lattice sites    */
     float self_eps;        /* self_r of rays spawned at triangle hits        */
     sg_hybrid_info info;
     int borrowed;          /* 1: tree.bundles, tree.colors, tri, tri_id, pos,
@@ -80,6 +91,54 @@ static inline uint32_t sg_hybrid__dominant_site(const uint32_t v[3], float b1, f
     const int a = w[1] > w[0];          /* the first after two vertices */
     const float wa = a ? w[1] : w[0], wb = a ? w[0] : w[1];
     return v[w[2] > wb && w[2] > wa ? 2 : a];
+}
+
+/* Vertex id of lattice point (i, j) of a triangle whose lattice begins at
+ * `first` with n subdivisions (invariant 4): rows i = 0..n hold
+ * n + 1 - i points each. */
+static inline uint32_t sg_hybrid__lattice_id(uint32_t first, uint32_t n, uint32_t i, uint32_t j)
+{
+    return first + i * (n + 1) - i * (i - 1) / 2 + j;
+}
+
+/* The triangle whose vertices carry the light at barycentrics (b1, b2) of
+ * the traced triangle at leaf slot `slot` with vertices v: the triangle
+ * itself, or, where it has a lattice, the lattice's small triangle holding
+ * the point, with the point's barycentrics in it. Each lattice cell
+ * (i, j) is split along the line i + j = const, as sg_mesh_make_plane
+ * splits a grid's cells: "up" (i, j), (i + 1, j), (i, j + 1) where the
+ * fractions sum to 1 or less, "down" (i + 1, j + 1), (i, j + 1),
+ * (i + 1, j) above. Points outside the triangle (rounding) are clamped
+ * into its edge cells; sg_hybrid__triangle_sites clamps the weights. */
+static inline void sg_hybrid__light_triangle(const struct sg_hybrid *h, uint32_t slot, const uint32_t v[3], float b1,
+                                             float b2, uint32_t out[3], float *ob1, float *ob2)
+{
+    const uint32_t n = h->lattice ? h->lattice[2 * (size_t)slot + 1] : 0u;
+    if (n == 0) {
+        out[0] = v[0], out[1] = v[1], out[2] = v[2];
+        *ob1 = b1, *ob2 = b2;
+        return;
+    }
+    const uint32_t first = h->lattice[2 * (size_t)slot];
+    const float fn = (float)n;
+    float B1 = b1 * fn, B2 = b2 * fn;
+    B1 = B1 > 0.0f ? (B1 < fn ? B1 : fn) : 0.0f; /* NaN -> 0 */
+    B2 = B2 > 0.0f ? (B2 < fn ? B2 : fn) : 0.0f;
+    uint32_t i = (uint32_t)B1, j = (uint32_t)B2;
+    i = i < n ? i : n - 1;
+    j = j < n - i ? j : n - 1 - i;
+    const float f1 = B1 - (float)i, f2 = B2 - (float)j;
+    /* Up or down by selects: on a plane seen from afar the two alternate
+     * from pixel to pixel, and a branch mispredicted half the time
+     * (docs/hybrid.md, "Few triangles, light at lattice sites"). */
+    const uint32_t down = (uint32_t)(f1 + f2 > 1.0f) & (uint32_t)(i + j + 2 <= n);
+    const uint32_t p = sg_hybrid__lattice_id(first, n, i + 1, j), q = sg_hybrid__lattice_id(first, n, i, j + 1);
+    out[0] = sg_hybrid__lattice_id(first, n, i + down, j + down);
+    out[1] = down ? q : p;
+    out[2] = down ? p : q;
+    const float d1 = 1.0f - f1, d2 = 1.0f - f2;
+    *ob1 = down ? d1 : f1;
+    *ob2 = down ? d2 : f2;
 }
 
 #endif

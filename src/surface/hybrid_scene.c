@@ -101,6 +101,8 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
             reach[i] = 0.0f;
         for (ptrdiff_t i = 0; i < nt; ++i) {
             const uint32_t *v = h->tri + 3 * (size_t)i;
+            if (h->lattice && h->lattice[2 * i + 1]) /* its lattice sites carry its light */
+                continue;
             for (int k = 0; k < 3; ++k) {
                 const size_t va = v[k], vb = v[(k + 1) % 3];
                 const int mine_a = va - lo < span, mine_b = vb - lo < span; /* unsigned: va >= lo too */
@@ -114,6 +116,28 @@ sg_status sg_hybrid_sites_create(const sg_hybrid *h, sg_hybrid_sites *out, sg_er
                 if (mine_b)
                     reach[vb] = e > reach[vb] ? e : reach[vb];
             }
+        }
+    }
+    /* A lattice site's reach: its triangle's longest edge over n, the
+     * longest edge of the small triangles it is interpolated over. Each
+     * triangle's sites are its own (hybrid_int.h invariant 4). */
+    if (h->lattice) {
+#pragma omp parallel for schedule(dynamic, 16)
+        for (ptrdiff_t i = 0; i < nt; ++i) {
+            const uint32_t n = h->lattice[2 * i + 1], first = h->lattice[2 * i];
+            if (n == 0)
+                continue;
+            const uint32_t *v = h->tri + 3 * (size_t)i;
+            float e = 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                const float *a = h->pos + 3 * (size_t)v[k], *b = h->pos + 3 * (size_t)v[(k + 1) % 3];
+                float l = sqrtf((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                                (a[2] - b[2]) * (a[2] - b[2]));
+                e = l > e ? l : e;
+            }
+            const uint32_t count = (n + 1) * (n + 2) / 2;
+            for (uint32_t q = 0; q < count; ++q)
+                reach[first + q] = e / (float)n;
         }
     }
     ptrdiff_t first_real = PTRDIFF_MAX;
@@ -222,7 +246,14 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     hit->leaf = hh->slot;
     hit->b1 = hh->b1;
     hit->b2 = hh->b2;
-    hit->splat = sg_hybrid__dominant_site(hh->vertex, hh->b1, hh->b2); /* the largest weight */
+    if (h->lattice) {
+        uint32_t v[3];
+        float b1, b2;
+        sg_hybrid__light_triangle(h, hh->slot, hh->vertex, hh->b1, hh->b2, v, &b1, &b2);
+        hit->splat = sg_hybrid__dominant_site(v, b1, b2);
+    } else {
+        hit->splat = sg_hybrid__dominant_site(hh->vertex, hh->b1, hh->b2); /* the largest weight */
+    }
     return 1;
 }
 
@@ -291,8 +322,14 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
 {
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
-    if (hit->leaf < h->info.triangle_count) /* the lookup's case, every pixel: no sg_hybrid_hit built */
-        return sg_hybrid__triangle_sites(h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, ids, weights, max);
+    if (hit->leaf < h->info.triangle_count) { /* the lookup's case, every pixel: no sg_hybrid_hit built */
+        if (!h->lattice)
+            return sg_hybrid__triangle_sites(h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, ids, weights, max);
+        uint32_t v[3];
+        float b1, b2;
+        sg_hybrid__light_triangle(h, hit->leaf, h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, v, &b1, &b2);
+        return sg_hybrid__triangle_sites(v, b1, b2, ids, weights, max);
+    }
     if (hit->splat >= s->view.count)
         return 0;
     ids[0] = hit->splat;
@@ -335,6 +372,32 @@ sg_ray sg_hybrid_scene_spawn_ray(const sg_hybrid *h, const sg_hybrid_sites *s, c
 
 enum { FILTER_MAX = 16 };
 
+/* Adds area x the mean over a lattice's n^2 small triangles (all of one
+ * area) of their vertex means to acc: a site on k of them counts k / 3
+ * times. */
+static void lattice_mean(uint32_t first, uint32_t n, const float *values, size_t stride, double area, double *acc)
+{
+    double sum[FILTER_MAX] = {0};
+    for (uint32_t i = 0; i <= n; ++i)
+        for (uint32_t j = 0; i + j <= n; ++j) {
+            /* small triangles touching (i, j): up ones with it as corner
+             * (i, j), (i - 1, j), (i, j - 1); down ones as (i - 1, j - 1)'s
+             * d, and as the b / c of (i, j - 1) / (i - 1, j) */
+            int k = 0;
+            k += i + j < n;                                /* up (i, j)           */
+            k += i >= 1 && i - 1 + j < n;                  /* up (i - 1, j)       */
+            k += j >= 1 && i + j - 1 < n;                  /* up (i, j - 1)       */
+            k += i >= 1 && j >= 1 && i + j <= n;           /* down (i - 1, j - 1) */
+            k += j >= 1 && i + j + 1 <= n;                 /* down (i, j - 1)     */
+            k += i >= 1 && i + j + 1 <= n;                 /* down (i - 1, j)     */
+            const size_t id = sg_hybrid__lattice_id(first, n, i, j);
+            for (size_t ch = 0; ch < stride; ++ch)
+                sum[ch] += k * (double)values[id * stride + ch];
+        }
+    for (size_t ch = 0; ch < stride; ++ch)
+        acc[ch] += area * sum[ch] / (3.0 * (double)n * (double)n);
+}
+
 /* Sums over node k's triangles of area x (vertex mean) into acc; writes
  * the node's mean; returns its area. Recursion depth: the tree's, <=
  * SG_STREE_MAX_DEPTH bundles (sphere_tree.h invariant 3). */
@@ -350,6 +413,7 @@ static double filter_node(const sg_hybrid *h, uint32_t k, float *values, size_t 
         const uint32_t first = sg_stree_leaf_first(word), count = sg_stree_leaf_count(word);
         for (uint32_t i = first; i < first + count; ++i) {
             const uint32_t *v = h->tri + 3 * (size_t)i;
+            const uint32_t n = h->lattice ? h->lattice[2 * (size_t)i + 1] : 0u;
             const float *a = h->pos + 3 * (size_t)v[0], *b = h->pos + 3 * (size_t)v[1], *c = h->pos + 3 * (size_t)v[2];
             double e1[3], e2[3];
             for (int q = 0; q < 3; ++q) {
@@ -359,9 +423,13 @@ static double filter_node(const sg_hybrid *h, uint32_t k, float *values, size_t 
             double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
                    nz = e1[0] * e2[1] - e1[1] * e2[0];
             double ar = 0.5 * sqrt(nx * nx + ny * ny + nz * nz);
-            for (size_t ch = 0; ch < stride; ++ch)
-                acc[ch] += ar * ((double)values[v[0] * stride + ch] + values[v[1] * stride + ch] +
-                                 values[v[2] * stride + ch]) / 3.0;
+            if (n == 0) {
+                for (size_t ch = 0; ch < stride; ++ch)
+                    acc[ch] += ar * ((double)values[v[0] * stride + ch] + values[v[1] * stride + ch] +
+                                     values[v[2] * stride + ch]) / 3.0;
+            } else {
+                lattice_mean(h->lattice[2 * (size_t)i], n, values, stride, ar, acc);
+            }
             area += ar;
         }
     } else {

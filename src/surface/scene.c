@@ -320,7 +320,11 @@ sg_status sg_scene_create_mesh(const sg_scene_desc *desc, const sg_mesh *mesh, c
     if (!sc)
         return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory");
     sc->desc = d;
-    sg_hybrid_desc hd = {.threads = d.threads, .name = label};
+    if (!isfinite(d.hybrid_site_spacing))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: hybrid site spacing %g is not finite", label,
+                            (double)d.hybrid_site_spacing);
+    sg_hybrid_desc hd = {.threads = d.threads, .name = label,
+                         .site_spacing = d.hybrid_site_spacing > 0.0f ? d.hybrid_site_spacing : 0.0f};
     sg_status st = sg_hybrid_create(&hd, mesh, &sc->hybrid, err);
     if (st == SG_OK)
         st = sg_hybrid_sites_create(sc->hybrid, &sc->hybrid_sites, err);

@@ -101,6 +101,16 @@ typedef struct sg_scene_desc {
                                   many ray footprints (sg_ray.spread) is hit
                                   as a point; default SG_HYBRID_LOD_DEFAULT
                                   (1 pixel); negative: full detail always    */
+    float hybrid_site_spacing; /* HYBRID: light sites about this far apart
+                                  (world units): triangles larger than this
+                                  carry a lattice of sites (hybrid.h
+                                  site_spacing); 0 = the default: meshes
+                                  from files at their vertices only, the
+                                  builtin ground and room as a few
+                                  triangles with lattices at the spacing
+                                  their "points" give (world.c); negative:
+                                  vertices only, the builtins as gridded
+                                  meshes (before stop 30)                  */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */

@@ -42,7 +42,7 @@ static const sg_scene_array_spec SPECS[SG_SA_COUNT] = {
     [SG_SA_HY_NODE_COLOR] = {"YC", SG_STORE_F32, 3},
     [SG_SA_HY_TRI] = {"YT", SG_STORE_U32, 3},      [SG_SA_HY_TRI_ID] = {"YI", SG_STORE_U32, 1},
     [SG_SA_HY_POS] = {"YP", SG_STORE_F32, 3},      [SG_SA_HY_NORMAL] = {"YN", SG_STORE_U32, 1},
-    [SG_SA_HY_COLOR] = {"YV", SG_STORE_F32, 3},
+    [SG_SA_HY_COLOR] = {"YV", SG_STORE_F32, 3},    [SG_SA_HY_LATTICE] = {"YL", SG_STORE_U32, 2},
 };
 
 /* The stored structs are these many elements, with no padding the
@@ -125,7 +125,7 @@ static void c_box(codec *c, sg_aabb *b)
 /* Every scalar of the scene, of its ISO and of its hybrid hierarchy (the
  * two zeroed when the scene has none: their slots are always there, so
  * the hybrid's do not move with the surface). The enum fields go through
- * int, whatever their storage. 105 slots. */
+ * int, whatever their storage. 109 slots. */
 static void scalars(codec *c, sg_scene *sc, sg_iso *iso, sg_hybrid *hy)
 {
     sg_scene_desc *d = &sc->desc;
@@ -202,6 +202,7 @@ static void scalars(codec *c, sg_scene *sc, sg_iso *iso, sg_hybrid *hy)
     hd->traversal = (sg_hybrid_traversal)e;
     c_int(c, &hd->leaf_max);
     c_int(c, &hd->threads);
+    c_f32(c, &hd->site_spacing);
     c_size(c, &hy->vertex_count);
     c_f32(c, &hy->self_eps);
     sg_stree *st = &hy->tree;
@@ -215,6 +216,9 @@ static void scalars(codec *c, sg_scene *sc, sg_iso *iso, sg_hybrid *hy)
     c_size(c, &hi->triangle_count);
     c_size(c, &hi->degenerate_count);
     c_size(c, &hi->vertex_count);
+    c_size(c, &hi->lattice_triangles);
+    c_size(c, &hi->lattice_sites);
+    c_size(c, &hi->memory_lattice);
     c_size(c, &hi->node_count);
     c_size(c, &hi->leaf_count);
     c_size(c, &hi->node_slots);
@@ -276,6 +280,8 @@ void sg_scene_store_of(const sg_scene *sc, sg_scene_store *out)
             put(out, SG_SA_HY_NORMAL, h->vnormal, h->vertex_count);
         if (h->vcolor)
             put(out, SG_SA_HY_COLOR, h->vcolor, h->vertex_count);
+        if (h->lattice)
+            put(out, SG_SA_HY_LATTICE, h->lattice, h->info.triangle_count);
         return;
     }
 
@@ -653,6 +659,42 @@ static sg_status check_triangles(const sg_hybrid *h, const char *label, sg_error
     return SG_OK;
 }
 
+/* Lattices (hybrid_int.h invariant 4): each a range of its own, in leaf
+ * order, after the mesh's vertices and within vertex_count; their sizes
+ * sum to the header's count. What a lookup indexes with. */
+static sg_status check_lattice(const sg_hybrid *h, const char *label, sg_error *err)
+{
+    const sg_hybrid_info *in = &h->info;
+    if (!h->lattice)
+        return in->lattice_sites || in->lattice_triangles
+                   ? sg_error_set(err, SG_ERR_CORRUPT, "%s: hybrid lattice counts without a lattice", label)
+                   : SG_OK;
+    if (in->lattice_sites >= h->vertex_count)
+        return sg_error_set(err, SG_ERR_CORRUPT, "%s: %zu hybrid lattice sites of %zu vertices", label,
+                            in->lattice_sites, h->vertex_count);
+    uint64_t next = h->vertex_count - in->lattice_sites, with = 0;
+    for (size_t i = 0; i < in->triangle_count; ++i) {
+        const uint64_t first = h->lattice[2 * i], n = h->lattice[2 * i + 1];
+        if (n == 0)
+            continue;
+        const uint64_t sites = (n + 1) * (n + 2) / 2;
+        if (n > 8192 || first != next || first + sites > h->vertex_count)
+            return sg_error_set(err, SG_ERR_CORRUPT,
+                                "%s: hybrid triangle %zu: lattice of %" PRIu64 " rows at vertex %" PRIu64
+                                " (expected at %" PRIu64 " of %zu)",
+                                label, i, n, first, next, h->vertex_count);
+        next += sites;
+        with++;
+    }
+    if (next != h->vertex_count || with != in->lattice_triangles)
+        return sg_error_set(err, SG_ERR_CORRUPT,
+                            "%s: hybrid lattices hold %" PRIu64 " sites on %" PRIu64 " triangles; the header says %zu "
+                            "on %zu",
+                            label, next - (h->vertex_count - in->lattice_sites), with, in->lattice_sites,
+                            in->lattice_triangles);
+    return SG_OK;
+}
+
 /* Optional array id: present with want items when `has`, absent when not. */
 static sg_status need_if(const sg_scene_store *in, sg_scene_array_id id, int has, uint64_t want, const char *label,
                          sg_error *err)
@@ -681,7 +723,8 @@ static sg_status load_hybrid(const sg_scene_store *in, sg_scene *sc, const char 
         (st = need(in, SG_SA_HY_TRI_ID, nt, label, err)) != SG_OK ||
         (st = need(in, SG_SA_HY_POS, nv, label, err)) != SG_OK ||
         (st = need_if(in, SG_SA_HY_NORMAL, !(h->desc.flags & SG_HYBRID_FLAT_SHADING), nv, label, err)) != SG_OK ||
-        (st = need_if(in, SG_SA_HY_COLOR, colours, nv, label, err)) != SG_OK)
+        (st = need_if(in, SG_SA_HY_COLOR, colours, nv, label, err)) != SG_OK ||
+        (st = need_if(in, SG_SA_HY_LATTICE, h->info.lattice_sites > 0, nt, label, err)) != SG_OK)
         return st;
     h->tree.bundles = (sg_stree_bundle *)in->data[SG_SA_HY_BUNDLES];
     h->tree.colors = (float *)in->data[SG_SA_HY_NODE_COLOR];
@@ -690,12 +733,14 @@ static sg_status load_hybrid(const sg_scene_store *in, sg_scene *sc, const char 
     h->pos = (float *)in->data[SG_SA_HY_POS];
     h->vnormal = (uint32_t *)in->data[SG_SA_HY_NORMAL]; /* any word decodes to a unit vector (oct.h) */
     h->vcolor = (float *)in->data[SG_SA_HY_COLOR];
+    h->lattice = (uint32_t *)in->data[SG_SA_HY_LATTICE];
     if ((st = check_finite(h->pos, nv, 3, "hybrid vertex", label, err)) != SG_OK ||
         (colours && (st = check_finite(h->vcolor, nv, 3, "hybrid vertex colour", label, err)) != SG_OK) ||
         (colours &&
          (st = check_finite(h->tree.colors, h->info.node_slots, 3, "sphere-tree node colour", label, err)) !=
              SG_OK) ||
-        (st = check_stree(&h->tree, label, err)) != SG_OK || (st = check_triangles(h, label, err)) != SG_OK)
+        (st = check_stree(&h->tree, label, err)) != SG_OK || (st = check_triangles(h, label, err)) != SG_OK ||
+        (st = check_lattice(h, label, err)) != SG_OK)
         return st;
     float lod = sc->desc.hybrid_lod;
     if (!isfinite(lod))

@@ -63,7 +63,8 @@
 /* Every array a scene may hold; which ones a surface uses: MLS all of
  * POINTS..SOA_KEY but the ISO's, DISK the same without SOA_KEY, ISO the
  * point set and ISO_*, HYBRID only HY_* (HY_NODE_COLOR and HY_COLOR when
- * the mesh had colours, HY_NORMAL unless flat shaded). */
+ * the mesh had colours, HY_NORMAL unless flat shaded, HY_LATTICE when a
+ * triangle has a lattice of light sites). */
 typedef enum sg_scene_array_id {
     SG_SA_PX, SG_SA_PY, SG_SA_PZ, SG_SA_NX, SG_SA_NY, SG_SA_NZ, SG_SA_RADIUS, SG_SA_AR, SG_SA_AG,
     SG_SA_AB,                                                         /* point set, count = splats  */
@@ -73,6 +74,7 @@ typedef enum sg_scene_array_id {
     SG_SA_ISO_NODES, SG_SA_ISO_LEAVES, SG_SA_ISO_CF, SG_SA_ISO_CN,   /* the octree (iso_int.h)     */
     SG_SA_HY_BUNDLES, SG_SA_HY_NODE_COLOR,                           /* sg_stree (sphere_tree.h)   */
     SG_SA_HY_TRI, SG_SA_HY_TRI_ID, SG_SA_HY_POS, SG_SA_HY_NORMAL, SG_SA_HY_COLOR, /* hybrid_int.h */
+    SG_SA_HY_LATTICE,                                                /* hybrid_int.h invariant 4 */
     SG_SA_COUNT
 } sg_scene_array_id;
 

@@ -905,11 +905,11 @@ static void test_scene_store_hybrid(void **state)
     c.store.data[SG_SA_HY_NODE_COLOR] = c.store.data[SG_SA_HY_POS]; /* this mesh has no colours */
     expect_store(&c, SG_ERR_CORRUPT, "array YC on a hybrid surface that has none");
     c.store.data[SG_SA_HY_NODE_COLOR] = NULL;
-    /* slot 87 holds the branching factor (scene_store.c scalars()) */
-    assert_int_equal(c.store.scalars[87], SG_STREE_WIDTH);
-    c.store.scalars[87] = SG_STREE_WIDTH == 8 ? 4 : 8;
+    /* slot 91 holds the branching factor (scene_store.c scalars()) */
+    assert_int_equal(c.store.scalars[91], SG_STREE_WIDTH);
+    c.store.scalars[91] = SG_STREE_WIDTH == 8 ? 4 : 8;
     expect_store(&c, SG_ERR_CORRUPT, "children per node");
-    c.store.scalars[87] = SG_STREE_WIDTH;
+    c.store.scalars[91] = SG_STREE_WIDTH;
     expect_store(&c, SG_OK, NULL); /* every damage was undone */
     free_copy(&c);
 
@@ -921,6 +921,41 @@ static void test_scene_store_hybrid(void **state)
     vc[3 * 5 + 2] = 0.5f;
     nc[0] = NAN;
     expect_store(&c, SG_ERR_CORRUPT, "sphere-tree node colour 0 is not finite");
+    free_copy(&c);
+
+    /* The ground: two triangles with lattices of light sites (20 rows:
+     * 231 sites each, after the mesh's 4 vertices; hybrid_int.h
+     * invariant 4). A lattice that overlaps another, runs past the
+     * vertices, or disagrees with the header's count is refused. */
+    copy_store_of(w, 1, &c);
+    expect_store(&c, SG_OK, NULL);
+    assert_int_equal(c.store.items[SG_SA_HY_LATTICE], 2);
+    assert_int_equal(c.store.items[SG_SA_HY_POS], 4 + 2 * 231);
+    uint32_t *lat = c.owned[SG_SA_HY_LATTICE];
+    assert_int_equal(lat[1], 20);
+    assert_int_equal(lat[3], 20);
+    assert_int_equal(lat[0], 4);
+    assert_int_equal(lat[2], 4 + 231);
+    lat[2] = 4 + 230; /* overlaps the first */
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid triangle 1: lattice of 20 rows at vertex 234 (expected at 235");
+    lat[2] = 4 + 231;
+    lat[3] = 21; /* runs past the vertices */
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid triangle 1: lattice of 21 rows");
+    lat[3] = 19; /* too few sites for the header */
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid lattices hold 441 sites on 2 triangles; the header says 462 on 2");
+    lat[3] = 0;
+    expect_store(&c, SG_ERR_CORRUPT, "hybrid lattices hold 231 sites on 1 triangles");
+    lat[3] = 20;
+    const void *keep_lat = c.store.data[SG_SA_HY_LATTICE];
+    c.store.data[SG_SA_HY_LATTICE] = NULL;
+    expect_store(&c, SG_ERR_CORRUPT, "array YL is missing");
+    c.store.data[SG_SA_HY_LATTICE] = keep_lat;
+    expect_store(&c, SG_OK, NULL); /* every damage was undone */
+    free_copy(&c);
+    copy_store_of(w, 2, &c); /* the sphere: no lattice */
+    c.store.data[SG_SA_HY_LATTICE] = c.store.data[SG_SA_HY_TRI_ID];
+    c.store.items[SG_SA_HY_LATTICE] = c.store.items[SG_SA_HY_TRI_ID];
+    expect_store(&c, SG_ERR_CORRUPT, "array YL on a hybrid surface that has none");
     free_copy(&c);
     sg_world_destroy(w);
     sg_scene_file_free(&sf);

@@ -49,8 +49,10 @@
  *                                  the plane's root is its centroid's f.
  * 13. hybrid::scene_file_roundtrip  "model": "hybrid" with "hybrid_lod" 2, 0
  *                                  (full detail) and absent: parsed as
- *                                  2, -1, the default; written and read
- *                                  back the same, hash for hash.
+ *                                  2, -1, the default; "hybrid_site_spacing"
+ *                                  0.5, 0, absent as 0.5, -1, 0; written and
+ *                                  read back the same, hash for hash; the
+ *                                  spacing changes the hash.
  * 14. hybrid::sites_threads_identical  sg_hybrid_sites_create (parallel)
  *                                  on 1 and 2 threads: every site's 10
  *                                  channels equal byte for byte, stand-ins
@@ -81,6 +83,14 @@
  *                                  sg_scene_intersect16), with edge and
  *                                  random masks; rays outside the mask
  *                                  stay unwritten.
+ * 18. hybrid::lattice_sites       desc.site_spacing: on irregular triangles
+ *                                  a hit's three lattice sites blend to the
+ *                                  hit point (linear precision), weights sum
+ *                                  to 1, the dominant site is the largest;
+ *                                  the 2-triangle square reads a field as
+ *                                  the 16 x 16 grid does (1e-5); filtered
+ *                                  into the root: the centroid's value; bad
+ *                                  spacings named; 1 and 2 threads alike.
  */
 #include "test_support.h"
 
@@ -1180,16 +1190,19 @@ static void test_hybrid_filter_nodes(void **state)
 static void test_hybrid_scene_file_roundtrip(void **state)
 {
     (void)state;
-    const char *json = "{\"models\":[{\"builtin\":\"ground\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":2}},"
-                       "{\"builtin\":\"sphere\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":0}},"
+    const char *json = "{\"models\":[{\"builtin\":\"ground\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":2,"
+                       "\"hybrid_site_spacing\":0.5}},"
+                       "{\"builtin\":\"sphere\",\"surface\":{\"model\":\"hybrid\",\"hybrid_lod\":0,"
+                       "\"hybrid_site_spacing\":0}},"
                        "{\"builtin\":\"bunny\",\"surface\":{\"model\":\"hybrid\"}}]}";
     sg_scene_file sf, back;
     sg_error err = {0};
     assert_int_equal(sg_scene_file_parse(json, strlen(json), "test.json", NULL, &sf, &err), SG_OK);
-    const float want[3] = {2.0f, -1.0f, 0.0f};
+    const float want[3] = {2.0f, -1.0f, 0.0f}, spacing[3] = {0.5f, -1.0f, 0.0f};
     for (int k = 0; k < 3; ++k) {
         assert_int_equal(sf.models[k].surface.model, SG_SURFACE_HYBRID);
         assert_float_equal(sf.models[k].surface.hybrid_lod, want[k], 0.0f);
+        assert_float_equal(sf.models[k].surface.hybrid_site_spacing, spacing[k], 0.0f);
     }
     char path[700];
     snprintf(path, sizeof path, "%s/hybrid_scene.json", sg_test_tmpdir());
@@ -1199,8 +1212,14 @@ static void test_hybrid_scene_file_roundtrip(void **state)
     for (int k = 0; k < 3; ++k) {
         assert_int_equal(back.models[k].surface.model, SG_SURFACE_HYBRID);
         assert_float_equal(back.models[k].surface.hybrid_lod, want[k], 0.0f);
+        assert_float_equal(back.models[k].surface.hybrid_site_spacing, spacing[k], 0.0f);
     }
     assert_true(sg_scene_file_hash(&back, SG_SCENE_HASH_ALL) == sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL));
+    /* the spacing is hashed (it makes the sites a bake fills) */
+    const uint64_t h0 = sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL);
+    sf.models[0].surface.hybrid_site_spacing = 0.25f;
+    assert_true(sg_scene_file_hash(&sf, SG_SCENE_HASH_ALL) != h0);
+    sf.models[0].surface.hybrid_site_spacing = 0.5f;
     sg_scene_file_free(&back);
     sg_scene_file_free(&sf);
 }
@@ -1547,6 +1566,182 @@ static void test_hybrid_intersect16_matches_single(void **state)
         sg_mesh_free(&meshes[mi]);
 }
 
+/* ---- 18: lattices of light sites ------------------------------------------ */
+
+static sg_scene *lattice_scene(const sg_mesh *m, float spacing)
+{
+    sg_scene_desc d = {.model = SG_SURFACE_HYBRID, .hybrid_site_spacing = spacing};
+    sg_scene *sc = NULL;
+    sg_error err = {0};
+    if (sg_scene_create_mesh(&d, m, "test mesh", &sc, &err) != SG_OK)
+        fail_msg("sg_scene_create_mesh: %s", err.message);
+    return sc;
+}
+
+/* The facts of the hierarchy lattice_scene builds (the same desc: the
+ * same hierarchy, threads_identical). */
+static sg_hybrid_info lattice_info(const sg_mesh *m, float spacing)
+{
+    sg_hybrid_desc d = {.site_spacing = spacing};
+    sg_hybrid *h = NULL;
+    sg_error err = {0};
+    if (sg_hybrid_create(&d, m, &h, &err) != SG_OK)
+        fail_msg("sg_hybrid_create: %s", err.message);
+    sg_hybrid_info hi;
+    sg_hybrid_get_info(h, &hi);
+    sg_hybrid_destroy(h);
+    return hi;
+}
+
+/* A smooth field over the sites, for interpolation comparisons. */
+static float field(sg_vec3 p) { return sinf(3.0f * p.x) + cosf(2.0f * p.z) + 0.5f * p.y; }
+
+/* The field interpolated at a hit from its sites, and the sites' blend of
+ * positions (= the hit point where the weights are barycentrics of a flat
+ * small triangle: linear precision). */
+static float interpolate(const sg_scene *sc, const sg_hit *hit, sg_vec3 *blend, float *wsum, uint32_t ids[3])
+{
+    const sg_sites *st = sg_scene_sites(sc);
+    float w[3], f = 0.0f;
+    int n = sg_scene_hit_sites(sc, hit, ids, w, 3);
+    assert_int_equal(n, 3);
+    *blend = sg_v3(0, 0, 0);
+    *wsum = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        sg_vec3 p = sg_sites_position(st, ids[k]);
+        *blend = sg_v3_madd(*blend, p, w[k]);
+        *wsum += w[k];
+        f += w[k] * field(p);
+    }
+    return f;
+}
+
+static void test_hybrid_lattice_sites(void **state)
+{
+    (void)state;
+    /* (a) Irregular triangles (acute, obtuse, a sliver; not in one plane)
+     * with lattices of 4 to 40 rows: every hit's three sites are lattice
+     * sites of its triangle, its weights sum to 1, their blend of the
+     * sites' positions is the hit point (so the small triangle and its
+     * weights are the right ones: up and down swapped, or a row off, move
+     * it by a cell), the dominant site is the largest weight's, and the
+     * sites are on the surface with unit normals and reach > 0. */
+    static const float P[] = {0, 0, 0, 4, 0.3f, 0, 1, 0.2f, 3, 5, 1, 3.5f, -3, 0.5f, 2, 9, 0.1f, 0.4f};
+    static const uint32_t T[] = {0, 2, 1, 1, 2, 3, 0, 4, 2, 1, 3, 5};
+    sg_mesh m = {.positions = (float *)P, .triangles = (uint32_t *)T, .vertex_count = 6, .triangle_count = 4};
+    sg_scene *sc = lattice_scene(&m, 0.2f);
+    const sg_sites *st = sg_scene_sites(sc);
+    sg_hybrid_info hi = lattice_info(&m, 0.2f);
+    assert_int_equal(hi.lattice_triangles, 4);
+    assert_true(hi.lattice_sites > 4 * 15 && hi.vertex_count == 6 + hi.lattice_sites);
+    uint64_t rng = 5;
+    int hits = 0, down = 0;
+    for (int k = 0; k < 20000; ++k) {
+        const uint32_t *t = T + 3 * (k % 4);
+        float a = sg_test_rand01(&rng), b = sg_test_rand01(&rng);
+        if (a + b > 1.0f)
+            a = 1.0f - a, b = 1.0f - b;
+        sg_vec3 v0 = vtx(&m, t[0]), v1 = vtx(&m, t[1]), v2 = vtx(&m, t[2]);
+        sg_vec3 target = sg_v3_add(v0, sg_v3_add(sg_v3_scale(sg_v3_sub(v1, v0), a), sg_v3_scale(sg_v3_sub(v2, v0), b)));
+        sg_vec3 o = sg_v3_add(target, sg_v3(0.3f * sg_test_rand01(&rng), 5.0f, 0.3f * sg_test_rand01(&rng)));
+        sg_ray r = ray_to(o, target);
+        sg_hit hit;
+        if (!sg_scene_intersect(sc, &r, &hit, NULL))
+            continue;
+        ++hits;
+        uint32_t ids[3];
+        sg_vec3 blend;
+        float wsum;
+        (void)interpolate(sc, &hit, &blend, &wsum, ids);
+        for (int q = 0; q < 3; ++q)
+            if (ids[q] < 6 || ids[q] >= hi.vertex_count)
+                fail_msg("hit %d: site %u is not a lattice site (6 .. %zu)", k, ids[q], hi.vertex_count - 1);
+        if (!(fabsf(wsum - 1.0f) < 1e-6f))
+            fail_msg("hit %d: weights sum to %.9g", k, (double)wsum);
+        if (!(sg_v3_length(sg_v3_sub(blend, hit.p)) < 2e-5f))
+            fail_msg("hit %d at (%g %g %g): its sites blend to (%g %g %g)", k, (double)hit.p.x, (double)hit.p.y,
+                     (double)hit.p.z, (double)blend.x, (double)blend.y, (double)blend.z);
+        uint32_t id1;
+        float w1;
+        assert_int_equal(sg_scene_hit_sites(sc, &hit, &id1, &w1, 1), 1);
+        assert_int_equal(hit.splat, id1);
+        /* a down triangle's first site is (i + 1, j + 1): two rows on */
+        down += ids[0] > ids[1] && ids[0] > ids[2];
+    }
+    assert_true(hits > 19000 && down > hits / 4);
+    for (size_t i = 6; i < hi.vertex_count; ++i) {
+        sg_vec3 nn = sg_sites_normal(st, (uint32_t)i);
+        if (!(fabsf(sg_v3_length(nn) - 1.0f) < 1e-3f) || !(st->radius[i] > 0.0f) || !(st->radius[i] < 0.4f))
+            fail_msg("lattice site %zu: normal length %g, reach %g", i, (double)sg_v3_length(nn),
+                     (double)st->radius[i]);
+    }
+    sg_scene_destroy(sc);
+
+    /* (b) The square [-1, 1]^2 as 2 triangles with lattices of spacing
+     * 2 / 16 reads light as the same square as 16 x 16 gridded cells does
+     * (world.c's ground): its sites are the grid's vertices (twice on the
+     * diagonal), a hit's small triangle is the grid's, the field
+     * interpolated from either equal to float rounding; 2 x 153 sites. */
+    sg_mesh grid, two;
+    assert_int_equal(sg_mesh_make_plane(16, 1.0f, &grid, NULL), SG_OK);
+    assert_int_equal(sg_mesh_make_plane(1, 1.0f, &two, NULL), SG_OK);
+    sg_scene *sg = lattice_scene(&grid, 0.0f), *sl = lattice_scene(&two, 2.0f / 16.0f);
+    hi = lattice_info(&two, 2.0f / 16.0f);
+    assert_int_equal(hi.lattice_triangles, 2);
+    assert_int_equal(hi.lattice_sites, 2 * 17 * 18 / 2);
+    float worst = 0.0f;
+    for (int k = 0; k < 20000; ++k) {
+        sg_vec3 target = sg_v3(1.98f * sg_test_rand01(&rng) - 0.99f, 0.0f, 1.98f * sg_test_rand01(&rng) - 0.99f);
+        sg_ray r = ray_to(sg_v3_add(target, sg_v3(0.7f * sg_test_rand01(&rng) - 0.35f, 2.0f, 0.2f)), target);
+        sg_hit hg, hl;
+        assert_true(sg_scene_intersect(sg, &r, &hg, NULL) && sg_scene_intersect(sl, &r, &hl, NULL));
+        uint32_t ig[3], il[3];
+        sg_vec3 bg, bl;
+        float sg_w, sl_w;
+        float fg = interpolate(sg, &hg, &bg, &sg_w, ig), fl = interpolate(sl, &hl, &bl, &sl_w, il);
+        worst = fmaxf(worst, fabsf(fg - fl));
+        if (!(fabsf(fg - fl) < 1e-5f))
+            fail_msg("at (%g, %g): the grid gives %.7g, the lattice %.7g", (double)target.x, (double)target.z,
+                     (double)fg, (double)fl);
+    }
+    printf("lattice against grid: largest difference %.3g over 20000 hits\n", (double)worst);
+    /* (c) Filtered into the nodes: f = x + 2 over the lattice averages to
+     * the centroid's 2 at the root (lattice_mean's counts of small
+     * triangles per site). */
+    st = sg_scene_sites(sl);
+    float *u = sg_alloc_array(st->count, sizeof(float));
+    assert_non_null(u);
+    for (size_t i = 0; i < st->count; ++i)
+        u[i] = i < hi.vertex_count ? st->px[i] + 2.0f : -50.0f;
+    sg_scene_filter_sites(sl, u, 1);
+    assert_float_equal(u[hi.vertex_count], 2.0f, 1e-6f);
+    sg_free(u);
+    sg_scene_destroy(sg);
+    sg_scene_destroy(sl);
+
+    /* (d) Bad spacings name the cause; 1 and 2 threads give one layout. */
+    sg_error err = {0};
+    sg_hybrid *h = NULL;
+    const float bad[] = {NAN, -1.0f, INFINITY};
+    for (int k = 0; k < 3; ++k) {
+        sg_hybrid_desc d = {.site_spacing = bad[k], .name = "plane"};
+        assert_int_equal(sg_hybrid_create(&d, &two, &h, &err), SG_ERR_INVALID_ARG);
+        assert_non_null(strstr(err.message, "plane: site spacing"));
+    }
+    sg_hybrid_desc tiny = {.site_spacing = 1e-4f, .name = "plane"};
+    assert_int_equal(sg_hybrid_create(&tiny, &two, &h, &err), SG_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "lattice rows, more than 8192"));
+    sg_hybrid_desc d1 = {.site_spacing = 0.01f, .threads = 1}, d2 = {.site_spacing = 0.01f, .threads = 2};
+    sg_hybrid *h1 = NULL, *h2 = NULL;
+    assert_int_equal(sg_hybrid_create(&d1, &two, &h1, &err), SG_OK);
+    assert_int_equal(sg_hybrid_create(&d2, &two, &h2, &err), SG_OK);
+    assert_true(sg_hybrid_layout_hash(h1) == sg_hybrid_layout_hash(h2));
+    sg_hybrid_destroy(h1);
+    sg_hybrid_destroy(h2);
+    sg_mesh_free(&grid);
+    sg_mesh_free(&two);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1568,6 +1763,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_albedo_is_site_blend),
         cmocka_unit_test(test_hybrid_intersect4_matches_single),
         cmocka_unit_test(test_hybrid_intersect16_matches_single),
+        cmocka_unit_test(test_hybrid_lattice_sites),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
