@@ -68,11 +68,11 @@
  *                                       (camera rays only: a bake stays valid)
  *           "hybrid_site_spacing": s,   [0, 1e6] world units: triangles larger
  *                                       than s carry lattices of light sites
- *                                       (hybrid.h); absent: none on mesh files,
- *                                       the builtin ground and room as a few
- *                                       triangles with lattices at their
- *                                       "points" spacing; 0: vertices only, the
- *                                       builtins as gridded meshes (hashed)
+ *                                       (hybrid.h); absent: none, but the
+ *                                       builtin ground is 2 triangles with
+ *                                       lattices at its "points" spacing; 0:
+ *                                       vertices only, the ground gridded
+ *                                       (hashed; render/world.c)
  *           "refinements": {"shrink": true, "encourage": true, "collapse": true}
  *         }
  *       } ],

@@ -104,13 +104,12 @@ typedef struct sg_scene_desc {
     float hybrid_site_spacing; /* HYBRID: light sites about this far apart
                                   (world units): triangles larger than this
                                   carry a lattice of sites (hybrid.h
-                                  site_spacing); 0 = the default: meshes
-                                  from files at their vertices only, the
-                                  builtin ground and room as a few
-                                  triangles with lattices at the spacing
-                                  their "points" give (world.c); negative:
-                                  vertices only, the builtins as gridded
-                                  meshes (before stop 30)                  */
+                                  site_spacing); 0 = the default: at the
+                                  vertices only, but the builtin ground as
+                                  2 triangles with lattices at the spacing
+                                  its "points" give (world.c); negative:
+                                  vertices only, the ground gridded as
+                                  before stop 30                           */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */

@@ -401,11 +401,8 @@ static void test_transport_ray_spread(void **state)
 static void test_transport_ray_cone_reaches_nodes(void **state)
 {
     (void)state;
-    /* the gridded room (site spacing 0): nodes small enough to be points;
-     * the default room is two triangles a wall with lattices of sites */
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"room\",\"points\":20000,"
-                                          "\"surface\":{\"model\":\"hybrid\",\"hybrid_site_spacing\":0}}],"
-                                          "\"envmap\":{\"builtin\":\"sunsky\"}}");
+                                          "\"surface\":{\"model\":\"hybrid\"}}],\"envmap\":{\"builtin\":\"sunsky\"}}");
     const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     /* vertex sites come first, then node slots (hybrid_scene.h): the
      * room's mesh as world.c builds it for 20000 points */

@@ -173,18 +173,19 @@ static void test_lod_rays_room_iso(void **state)
 static void test_lod_rays_room_hybrid(void **state)
 {
     (void)state;
-    /* the room as gridded walls (site spacing 0: cells of 0.05, light at
-     * their vertices), whose nodes are small enough to be points */
-    check_room("\"model\": \"hybrid\", \"hybrid_site_spacing\": 0", 1);
+    /* the room as gridded walls (cells of 0.05, light at their vertices),
+     * whose nodes are small enough to be points */
+    check_room("\"model\": \"hybrid\"", 1);
 }
 
-/* 1 and 3 on the default hybrid room: two triangles a rectangle with
- * lattices of light sites (world.c), the sites' surfaces found and their
- * rays neither starting on their own wall nor leaving through one. */
+/* 1 and 3 on the hybrid room as two triangles a rectangle with lattices
+ * of light sites at the grid's spacing (world.c): the sites' surfaces
+ * found and their rays neither starting on their own wall nor leaving
+ * through one. */
 static void test_lod_rays_room_hybrid_lattice(void **state)
 {
     (void)state;
-    check_room("\"model\": \"hybrid\"", 0);
+    check_room("\"model\": \"hybrid\", \"hybrid_site_spacing\": 0.052", 0);
 }
 
 int main(void)
