@@ -996,15 +996,17 @@ static void test_hybrid_kernels_agree(void **state)
 
 /* ---- 10-11: behind sg_scene ------------------------------------------------- */
 
-static sg_scene *mesh_scene(const sg_mesh *m, float lod)
+static sg_scene *hybrid_scene(const sg_mesh *m, float lod, float site_spacing)
 {
-    sg_scene_desc d = {.model = SG_SURFACE_HYBRID, .hybrid_lod = lod};
+    sg_scene_desc d = {.model = SG_SURFACE_HYBRID, .hybrid_lod = lod, .hybrid_site_spacing = site_spacing};
     sg_scene *sc = NULL;
     sg_error err = {0};
     if (sg_scene_create_mesh(&d, m, "test mesh", &sc, &err) != SG_OK)
         fail_msg("sg_scene_create_mesh: %s", err.message);
     return sc;
 }
+
+static sg_scene *mesh_scene(const sg_mesh *m, float lod) { return hybrid_scene(m, lod, 0.0f); }
 
 static void test_hybrid_scene_interface(void **state)
 {
@@ -1569,15 +1571,7 @@ static void test_hybrid_intersect16_matches_single(void **state)
 
 /* ---- 18: lattices of light sites ------------------------------------------ */
 
-static sg_scene *lattice_scene(const sg_mesh *m, float spacing)
-{
-    sg_scene_desc d = {.model = SG_SURFACE_HYBRID, .hybrid_site_spacing = spacing};
-    sg_scene *sc = NULL;
-    sg_error err = {0};
-    if (sg_scene_create_mesh(&d, m, "test mesh", &sc, &err) != SG_OK)
-        fail_msg("sg_scene_create_mesh: %s", err.message);
-    return sc;
-}
+static sg_scene *lattice_scene(const sg_mesh *m, float spacing) { return hybrid_scene(m, 0.0f, spacing); }
 
 /* The facts of the hierarchy lattice_scene builds (the same desc: the
  * same hierarchy, threads_identical). */
