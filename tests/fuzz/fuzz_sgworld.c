@@ -7,7 +7,7 @@
  *    arrays, as a file made for this scene would;
  *  - odd: CRCs stop a fuzzer at the file's checksums, so this mode damages
  *    the arrays of a valid world directly: byte 1 picks the model (MLS,
- *    disk, ISO, hybrid), then each 5 bytes (offset u32, xor u8) flip bits anywhere
+ *    disk, ISO, hybrid, hybrid with lattices of light sites), then each 5 bytes (offset u32, xor u8) flip bits anywhere
  *    in its scalars and arrays; sg_scene_from_store must refuse or give a
  *    scene every query runs on without a fault (rays with and without a
  *    footprint, so the hybrid's level-of-detail path runs too). */
@@ -36,7 +36,8 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
         "{\"models\": [{\"builtin\": \"sphere\", \"points\": 60},"
         " {\"builtin\": \"ground\", \"points\": 16, \"surface\": {\"model\": \"disk\"}},"
         " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"iso\"}},"
-        " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"hybrid\"}}]}";
+        " {\"builtin\": \"sphere\", \"points\": 60, \"surface\": {\"model\": \"hybrid\"}},"
+        " {\"builtin\": \"ground\", \"points\": 16, \"surface\": {\"model\": \"hybrid\"}}]}";
     sg_error err;
     if (sg_scene_file_parse(json, sizeof json - 1, "fuzz", NULL, &scene, &err) != SG_OK ||
         sg_world_create(&scene, &world, &err) != SG_OK)
@@ -79,7 +80,7 @@ static void store_mode(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return;
-    uint32_t m = data[0] % 4;
+    uint32_t m = data[0] % 5;
     sg_scene_store st;
     sg_scene_store_of(sg_world_scene(world, m), &st);
     /* copies of the arrays, laid end to end after the scalars for the edits */
