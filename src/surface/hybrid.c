@@ -183,9 +183,6 @@ static sg_status make_normals(sg_hybrid *h, const sg_mesh *m, const uint32_t *tr
     return SG_OK;
 }
 
-/* Lattice sites of a triangle: more than this many subdivisions means a
- * spacing absurdly small for the triangle (n^2 / 2 sites on one). */
-#define LATTICE_MAX_N 8192u
 
 /* How far lattice sites sit inside their triangle, in cells (make_lattice). */
 #define SHRINK 3e-3
@@ -223,12 +220,12 @@ static sg_status make_lattice(sg_hybrid *h, float spacing, const char *name, sg_
          * scaled ground's side over its cell) gives k, not k + 1 */
         double n = e > (double)spacing ? ceil(e / (double)spacing * (1.0 - 1e-6)) : 0.0;
         n = n >= 2.0 ? n : 0.0; /* one row: the triangle's own vertices */
-        if (n > (double)LATTICE_MAX_N) {
+        if (n > (double)SG_HYBRID_LATTICE_MAX_N) {
             sg_free(lat);
             return sg_error_set(err, SG_ERR_INVALID_ARG,
                                 "%s: site spacing %g splits triangle %u (edge %g) into %.0f lattice rows, "
                                 "more than %u",
-                                name, (double)spacing, h->tri_id[i], e, n, LATTICE_MAX_N);
+                                name, (double)spacing, h->tri_id[i], e, n, SG_HYBRID_LATTICE_MAX_N);
         }
         const size_t sites = n > 0.0 ? ((size_t)n + 1) * ((size_t)n + 2) / 2 : 0;
         lat[2 * i] = (uint32_t)(nv + total < SG_INVALID_ID ? nv + total : 0);

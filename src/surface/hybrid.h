@@ -63,7 +63,9 @@
  * So a big flat triangle (a ground, a wall: a few triangles to trace)
  * holds its light at the resolution the bake needs, and a plane made of
  * two such triangles reads its light as the same plane made of n x n
- * cells would. Lattice sites on an edge two triangles share are computed
+ * cells would (its sites sit 3e-3 of a cell inside their triangle, so
+ * that a site on an edge where two walls meet does not start the bake's
+ * rays on the other wall's plane). Lattice sites on an edge two triangles share are computed
  * from that edge on each side (equal positions to rounding). sg_hybrid_hit_sites gives ids and weights summing
  * to 1. Node ids are dense in [0, node_slots); a few slots are empty
  * (sg_hybrid_site returns 0 for them) so that ids stay a plain index.

@@ -93,6 +93,10 @@ static inline uint32_t sg_hybrid__dominant_site(const uint32_t v[3], float b1, f
     return v[w[2] > wb && w[2] > wa ? 2 : a];
 }
 
+/* Most rows a lattice may have (hybrid.c refuses a spacing that needs
+ * more; a world file's lattices are checked against it). */
+#define SG_HYBRID_LATTICE_MAX_N 8192u
+
 /* Vertex id of lattice point (i, j) of a triangle whose lattice begins at
  * `first` with n subdivisions (invariant 4): rows i = 0..n hold
  * n + 1 - i points each. */

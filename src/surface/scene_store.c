@@ -678,7 +678,7 @@ static sg_status check_lattice(const sg_hybrid *h, const char *label, sg_error *
         if (n == 0)
             continue;
         const uint64_t sites = (n + 1) * (n + 2) / 2;
-        if (n > 8192 || first != next || first + sites > h->vertex_count)
+        if (n > SG_HYBRID_LATTICE_MAX_N || first != next || first + sites > h->vertex_count)
             return sg_error_set(err, SG_ERR_CORRUPT,
                                 "%s: hybrid triangle %zu: lattice of %" PRIu64 " rows at vertex %" PRIu64
                                 " (expected at %" PRIu64 " of %zu)",
