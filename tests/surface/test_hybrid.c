@@ -56,7 +56,8 @@
  * 14. hybrid::sites_threads_identical  sg_hybrid_sites_create (parallel)
  *                                  on 1 and 2 threads: every site's 10
  *                                  channels equal byte for byte, stand-ins
- *                                  included.
+ *                                  included, on a sphere and on a plane
+ *                                  with lattices.
  * 15. hybrid::albedo_is_site_blend  sg_scene_hit_albedo (which skips the
  *                                  colour reads when every site is white)
  *                                  equals the blend of the hit's sites'
