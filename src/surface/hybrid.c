@@ -228,16 +228,16 @@ static sg_status make_lattice(sg_hybrid *h, float spacing, const char *name, sg_
                                 name, (double)spacing, h->tri_id[i], e, n, SG_HYBRID_LATTICE_MAX_N);
         }
         const size_t sites = n > 0.0 ? ((size_t)n + 1) * ((size_t)n + 2) / 2 : 0;
-        lat[2 * i] = (uint32_t)(nv + total < SG_INVALID_ID ? nv + total : 0);
-        lat[2 * i + 1] = (uint32_t)n;
-        total += sites;
-        with += sites > 0;
-        if (nv + total >= SG_INVALID_ID) {
+        if (nv + total + sites >= SG_INVALID_ID) {
             sg_free(lat);
             return sg_error_set(err, SG_ERR_INVALID_ARG,
                                 "%s: site spacing %g makes more than %u vertices and lattice sites", name,
                                 (double)spacing, SG_INVALID_ID - 1u);
         }
+        lat[2 * i] = (uint32_t)(nv + total);
+        lat[2 * i + 1] = (uint32_t)n;
+        total += sites;
+        with += sites > 0;
     }
     if (total == 0) {
         sg_free(lat);

@@ -246,14 +246,10 @@ static int scene_hit(const sg_hybrid *h, const sg_hybrid_sites *s, const sg_ray 
     hit->leaf = hh->slot;
     hit->b1 = hh->b1;
     hit->b2 = hh->b2;
-    if (h->lattice) {
-        uint32_t v[3];
-        float b1, b2;
-        sg_hybrid__light_triangle(h, hh->slot, hh->vertex, hh->b1, hh->b2, v, &b1, &b2);
-        hit->splat = sg_hybrid__dominant_site(v, b1, b2);
-    } else {
-        hit->splat = sg_hybrid__dominant_site(hh->vertex, hh->b1, hh->b2); /* the largest weight */
-    }
+    uint32_t v[3];
+    float b1, b2;
+    sg_hybrid__light_triangle(h, hh->slot, hh->vertex, hh->b1, hh->b2, v, &b1, &b2);
+    hit->splat = sg_hybrid__dominant_site(v, b1, b2); /* the largest weight */
     return 1;
 }
 
@@ -323,8 +319,6 @@ int sg_hybrid_scene_hit_sites(const sg_hybrid *h, const sg_hybrid_sites *s, cons
     if (max <= 0 || hit->splat == SG_INVALID_ID)
         return 0;
     if (hit->leaf < h->info.triangle_count) { /* the lookup's case, every pixel: no sg_hybrid_hit built */
-        if (!h->lattice)
-            return sg_hybrid__triangle_sites(h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, ids, weights, max);
         uint32_t v[3];
         float b1, b2;
         sg_hybrid__light_triangle(h, hit->leaf, h->tri + 3 * (size_t)hit->leaf, hit->b1, hit->b2, v, &b1, &b2);
