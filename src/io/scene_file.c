@@ -1030,12 +1030,14 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
                 if (m->surface.iso_leaf_radii != 0.0f) /* earlier ISO bakes keep their hashes */
                     h_f32(&h, m->surface.iso_leaf_radii);
             }
-            /* Light sites on lattices (hybrid.h): the builtin ground changed
-             * from a gridded mesh to two triangles with lattices (stop 30),
-             * and its bakes' sites with it; other hybrid models without a
-             * spacing keep their hashes. */
+            /* Light sites on lattices (hybrid.h): the builtin ground (stop
+             * 30) and room (stop 31) changed from gridded meshes to two
+             * triangles a rectangle with lattices, and their bakes' sites
+             * with them; other hybrid models without a spacing keep their
+             * hashes. */
             if (m->surface.model == SG_SURFACE_HYBRID &&
-                (m->kind == SG_SCENE_MODEL_GROUND || m->surface.hybrid_site_spacing != 0.0f)) {
+                (m->kind == SG_SCENE_MODEL_GROUND || m->kind == SG_SCENE_MODEL_ROOM ||
+                 m->surface.hybrid_site_spacing != 0.0f)) {
                 h_u64(&h, 0x4c415454u); /* "LATT" */
                 h_f32(&h, m->surface.hybrid_site_spacing);
             }

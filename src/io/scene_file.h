@@ -69,9 +69,10 @@
  *           "hybrid_site_spacing": s,   [0, 1e6] world units: triangles larger
  *                                       than s carry lattices of light sites
  *                                       (hybrid.h); absent: none, but the
- *                                       builtin ground is 2 triangles with
- *                                       lattices at its "points" spacing; 0:
- *                                       vertices only, the ground gridded
+ *                                       builtin ground and room are 2
+ *                                       triangles a rectangle with lattices
+ *                                       at their "points" spacing; 0:
+ *                                       vertices only, those two gridded
  *                                       (hashed; render/world.c)
  *           "refinements": {"shrink": true, "encourage": true, "collapse": true}
  *         }

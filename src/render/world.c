@@ -80,17 +80,14 @@ static sg_status load_model_points(const sg_scene_model *m, size_t index, sg_poi
  * round(sqrt(points)), default 128), "sphere" the unit sphere with
  * rings = round(sqrt(points / 2)) bands (default 224: 100k triangles),
  * "room" as points/room.h builds it in cells of sqrt(162 m^2 / points)
- * (default 250k: 0.025). The ground is 2 triangles whose light sites are
- * lattices at its grid's spacing (hybrid.h site_spacing; *spacing is
- * set): a ray crosses two triangles, not a hierarchy of a grid's 32k, and
- * the light has the grid's resolution (the same frame to 1e-7). A
+ * (default 250k: 0.025). The ground and the room are 2 triangles a
+ * rectangle whose light sites are lattices at their grid's spacing
+ * (hybrid.h site_spacing; *spacing is set): a ray crosses a few
+ * triangles, not a hierarchy of a grid's tens of thousands, and the light
+ * has the grid's resolution (the ground's frame the same to 1e-7; the
+ * room's bake within the spread of its sample sets, docs/hybrid.md). A
  * negative hybrid_site_spacing in the surface desc asks for the gridded
- * ground of before (*spacing stays 0): the A/B of docs/hybrid.md. The
- * room stays gridded unless the file gives a spacing: its rectangles are
- * long and thin (walls 0.2 thick), their lattices' small triangles
- * slivers with many more sites than cells, and its bake on lattices came
- * out 7.9% brighter than on the grid (docs/hybrid.md): not the default
- * until that is understood. */
+ * meshes of before (*spacing stays 0): the A/B of docs/hybrid.md. */
 static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh *out, float *spacing, sg_error *err)
 {
     const int gridded = m->surface.hybrid_site_spacing < 0.0f;
@@ -121,11 +118,11 @@ static sg_status load_model_mesh(const sg_scene_model *m, size_t index, sg_mesh 
          * outside 90) */
         double n = m->points.points > 0 ? (double)m->points.points : 250000.0;
         const float cell = (float)fmax(0.005, sqrt(162.0 / n));
-        if (!(own > 0.0f)) { /* gridded by default: see the comment above */
+        if (gridded) {
             sg_room_desc rd = {.cell = cell};
             return sg_room_mesh(&rd, out, err);
         }
-        *spacing = own;
+        *spacing = own > 0.0f ? own : cell;
         return sg_room_mesh(NULL, out, err); /* two triangles a rectangle */
     }
     default:

@@ -105,11 +105,12 @@ typedef struct sg_scene_desc {
                                   (world units): triangles larger than this
                                   carry a lattice of sites (hybrid.h
                                   site_spacing); 0 = the default: at the
-                                  vertices only, but the builtin ground as
-                                  2 triangles with lattices at the spacing
-                                  its "points" give (world.c); negative:
-                                  vertices only, the ground gridded as
-                                  before stop 30                           */
+                                  vertices only, but the builtin ground and
+                                  room as 2 triangles a rectangle with
+                                  lattices at the spacing their "points"
+                                  give (world.c); negative: vertices only,
+                                  the ground and room gridded as before
+                                  stops 30 and 31                          */
 } sg_scene_desc;
 
 /* Build-time facts, for reports and benchmarks. */

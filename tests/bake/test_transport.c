@@ -391,7 +391,9 @@ static void test_transport_ray_spread(void **state)
     }
 }
 
-/* 8. The sites' rays carry the cone: on the hybrid room, the gather with
+/* 8. The sites' rays carry the cone: on the gridded hybrid room
+ * ("hybrid_site_spacing": 0; the default room is a few triangles with
+ * lattices, whose hierarchy has no small nodes), the gather with
  * ray_cone 4 meets the hierarchy's inner nodes (light sites past the
  * vertices, hybrid.h) where the thin rays of ray_cone 0 meet vertices
  * only; the direct light's visibility ratio barely moves (the room's
@@ -402,7 +404,8 @@ static void test_transport_ray_cone_reaches_nodes(void **state)
 {
     (void)state;
     sg_world *w = sg_test_world_from_json("{\"models\":[{\"builtin\":\"room\",\"points\":20000,"
-                                          "\"surface\":{\"model\":\"hybrid\"}}],\"envmap\":{\"builtin\":\"sunsky\"}}");
+                                          "\"surface\":{\"model\":\"hybrid\",\"hybrid_site_spacing\":0}}],"
+                                          "\"envmap\":{\"builtin\":\"sunsky\"}}");
     const sg_sites *ps = sg_scene_sites(sg_world_scene(w, 0));
     /* vertex sites come first, then node slots (hybrid_scene.h): the
      * room's mesh as world.c builds it for 20000 points */

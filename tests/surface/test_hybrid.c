@@ -93,6 +93,11 @@
  *                                  the 16 x 16 grid does (2e-3); filtered
  *                                  into the root: the centroid's value; bad
  *                                  spacings named; 1 and 2 threads alike.
+ * 19. hybrid::builtin_room_lattice the world's builtin room on the hybrid
+ *                                  is 2 triangles a rectangle with lattices
+ *                                  at its "points" spacing (world.c), the
+ *                                  gridded room with "hybrid_site_spacing":
+ *                                  0; the two hash apart.
  */
 #include "test_support.h"
 
@@ -103,6 +108,7 @@
 
 #include "core/alloc.h"
 #include "points/mesh_shapes.h"
+#include "points/room.h"
 #include "accel/sphere_bundle.h"
 #include "math/oct.h"
 #include "math/triangle.h"
@@ -1773,6 +1779,50 @@ static void test_hybrid_lattice_sites(void **state)
     sg_mesh_free(&two);
 }
 
+/* ---- 19: the builtin room on lattices ---------------------------------------- */
+
+/* The vertex count of the world's first scene (a hybrid scene's
+ * splat_count: its mesh's vertices and lattice sites, scene.h). */
+static size_t world_sites(const char *json)
+{
+    sg_world *w = sg_test_world_from_json(json);
+    sg_scene_info si;
+    sg_scene_get_info(sg_world_scene(w, 0), &si);
+    sg_world_destroy(w);
+    return si.splat_count;
+}
+
+static void test_hybrid_builtin_room_lattice(void **state)
+{
+    (void)state;
+    const char *lattice = "{\"models\":[{\"builtin\":\"room\",\"points\":20000,\"surface\":{\"model\":\"hybrid\"}}]}";
+    const char *gridded = "{\"models\":[{\"builtin\":\"room\",\"points\":20000,"
+                          "\"surface\":{\"model\":\"hybrid\",\"hybrid_site_spacing\":0}}]}";
+    /* world.c: cells of sqrt(162 m^2 / points) */
+    const float cell = (float)fmax(0.005, sqrt(162.0 / 20000.0));
+    sg_mesh two, grid;
+    sg_room_desc rd = {.cell = cell};
+    assert_int_equal(sg_room_mesh(NULL, &two, NULL), SG_OK);
+    assert_int_equal(sg_room_mesh(&rd, &grid, NULL), SG_OK);
+    const sg_hybrid_info hl = lattice_info(&two, cell), hg = lattice_info(&grid, 0.0f);
+    assert_true(hl.triangle_count == two.triangle_count && hl.lattice_triangles > 0);
+    assert_true(hg.lattice_triangles == 0 && hg.triangle_count > 10 * hl.triangle_count);
+    const size_t nl = world_sites(lattice), ng = world_sites(gridded);
+    if (nl != hl.vertex_count || ng != hg.vertex_count)
+        fail_msg("room vertices: default %zu (want the lattice room's %zu), spacing 0 %zu (want the grid's %zu)", nl,
+                 hl.vertex_count, ng, hg.vertex_count);
+    /* the bakes of the two are not interchangeable */
+    sg_scene_file a, b;
+    sg_error err = {0};
+    assert_int_equal(sg_scene_file_parse(lattice, strlen(lattice), "a.json", NULL, &a, &err), SG_OK);
+    assert_int_equal(sg_scene_file_parse(gridded, strlen(gridded), "b.json", NULL, &b, &err), SG_OK);
+    assert_true(sg_scene_file_hash(&a, SG_SCENE_HASH_ALL) != sg_scene_file_hash(&b, SG_SCENE_HASH_ALL));
+    sg_scene_file_free(&a);
+    sg_scene_file_free(&b);
+    sg_mesh_free(&two);
+    sg_mesh_free(&grid);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1795,6 +1845,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_intersect4_matches_single),
         cmocka_unit_test(test_hybrid_intersect16_matches_single),
         cmocka_unit_test(test_hybrid_lattice_sites),
+        cmocka_unit_test(test_hybrid_builtin_room_lattice),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -179,9 +179,10 @@ static void test_lod_rays_room_iso(void **state)
 static void test_lod_rays_room_hybrid(void **state)
 {
     (void)state;
-    /* the room as gridded walls (cells of 0.05, light at their vertices),
-     * whose nodes are small enough to be points */
-    check_room("\"model\": \"hybrid\"", 1, 0.3f, 60000);
+    /* the room as gridded walls (cells of 0.05, light at their vertices;
+     * the default room is 2 triangles a rectangle), whose nodes are small
+     * enough to be points */
+    check_room("\"model\": \"hybrid\", \"hybrid_site_spacing\": 0", 1, 0.3f, 60000);
 }
 
 /* 1 and 3 on the hybrid room as two triangles a rectangle with lattices
@@ -197,6 +198,8 @@ static void test_lod_rays_room_hybrid_lattice(void **state)
 {
     (void)state;
     check_room("\"model\": \"hybrid\", \"hybrid_site_spacing\": 0.0232", 0, 0.0f, 300000);
+    /* the default room (stop 31), coarser: lattices at sqrt(162 / 60000) */
+    check_room("\"model\": \"hybrid\"", 0, 0.0f, 60000);
 }
 
 int main(void)
