@@ -100,7 +100,8 @@ static sg_status setup_models(sg_bake_job *j, sg_error *err)
         if (x->s0 > 0.0f) { /* sites off the surface are only interpolated to */
             if (!(x->off_surface = sg_alloc_array(x->ps->count, sizeof *x->off_surface)))
                 return sg_error_set(err, SG_ERR_NOMEM, "bake: out of memory for %zu splats", x->ps->count);
-            if (sg_transport_off_surface_sites(j->w, (uint32_t)m, threads, x->off_surface) > 0) {
+            if (sg_transport_off_surface_sites(j->w, (uint32_t)m, threads, x->off_surface) > 0 ||
+                x->ps->unsampled) { /* the scene's own unsampled sites are marked too */
                 x->view = *x->ps;
                 x->view.unsampled = x->off_surface;
                 x->ps = &x->view;

@@ -133,16 +133,20 @@ static int cmp_float(const void *a, const void *b)
 
 sg_status sg_samples_median_radius(const sg_sites *ps, float *out, sg_error *err)
 {
-    if (ps->count == 0) {
-        *out = 0.0f;
+    *out = 0.0f;
+    if (ps->count == 0)
         return SG_OK;
-    }
     float *r = sg_alloc_array(ps->count, sizeof *r);
     if (!r)
         return sg_error_set(err, SG_ERR_NOMEM, "samples: out of memory for %zu radii", ps->count);
-    memcpy(r, ps->radius, ps->count * sizeof *r);
-    qsort(r, ps->count, sizeof *r, cmp_float);
-    *out = r[ps->count / 2];
+    size_t n = 0;
+    for (size_t i = 0; i < ps->count; ++i)
+        if (!(ps->unsampled && ps->unsampled[i]))
+            r[n++] = ps->radius[i];
+    if (n) {
+        qsort(r, n, sizeof *r, cmp_float);
+        *out = r[n / 2];
+    }
     sg_free(r);
     return SG_OK;
 }

@@ -59,7 +59,8 @@ typedef struct sg_sample_set {
 
 void sg_sample_set_free(sg_sample_set *set);
 
-/* Median of ps->radius (0 for an empty set). SG_ERR_NOMEM only. */
+/* Median of ps->radius over the sites that may be sample points (not
+ * unsampled; 0 when there are none). SG_ERR_NOMEM only. */
 sg_status sg_samples_median_radius(const sg_sites *ps, float *out, sg_error *err);
 
 /* Default spacing of a material's sample points, as a multiple of the

@@ -236,6 +236,10 @@ size_t sg_transport_off_surface_sites(const sg_world *w, uint32_t m, int threads
     size_t off = 0;
 #pragma omp parallel for schedule(dynamic, 1024) reduction(+ : off) num_threads(nt)
     for (size_t i = 0; i < ps->count; ++i) {
+        if (ps->unsampled && ps->unsampled[i]) {
+            out[i] = 1;
+            continue;
+        }
         out[i] = (uint8_t)site_off_surface(w, m, (uint32_t)i);
         off += out[i];
     }

@@ -137,8 +137,9 @@ sg_status sg_transport_gather(const sg_world *w, uint32_t m, const sg_sample_set
  * inside the model or off its surface (an octree's corners under a floor
  * at a wall's foot, in the pocket where a floor's smooth surface runs on
  * under a wall) and pass walls from behind, so they must not be sample
- * points (sites.h unsampled). Returns how many; deterministic, any thread
- * count. */
+ * points (sites.h unsampled). Sites the scene already marks unsampled
+ * (the ISO's node sites) are marked without a look and not counted.
+ * Returns how many it found; deterministic, any thread count. */
 size_t sg_transport_off_surface_sites(const sg_world *w, uint32_t m, int threads, uint8_t *out);
 
 /* For the distributed bake (bake/bake_comm.h): the sites of all of sd's

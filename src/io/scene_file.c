@@ -1029,6 +1029,12 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
                 h_u64(&h, (uint64_t)(int64_t)m->surface.iso_max_depth);
                 if (m->surface.iso_leaf_radii != 0.0f) /* earlier ISO bakes keep their hashes */
                     h_f32(&h, m->surface.iso_leaf_radii);
+                /* Since stop 31 an ISO's light sites include its inner
+                 * nodes' (iso_sites.h), so a bake (keyed with the map:
+                 * SG_SCENE_HASH_BAKE) of before has too few; the octree, and
+                 * a world file's key (the models alone), are unchanged. */
+                if (parts & SG_SCENE_HASH_ENV)
+                    h_u64(&h, 0x4e4f4445u); /* "NODE" */
             }
             /* Light sites on lattices (hybrid.h): the builtin ground (stop
              * 30) and room (stop 31) changed from gridded meshes to two

@@ -583,8 +583,10 @@ static int lod_hit(const sg_iso *iso, uint32_t node, sg_aabb b, float t0, float 
     }
     patch_coeffs(&P);
     ray_state before = *rs;
-    if (patch_hit(iso, &P, b, t0, t1, rs, hit))
+    if (patch_hit(iso, &P, b, t0, t1, rs, hit)) {
+        hit->leaf = (uint32_t)iso->leaf_count + node; /* names the node (iso.h): its filtered light */
         return 1;
+    }
     uint64_t isects = rs->isects, roots = rs->roots;
     *rs = before;
     rs->isects = isects;

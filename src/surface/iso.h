@@ -64,9 +64,11 @@
  *    level of detail never opens a hole. It can widen a silhouette by at
  *    most one such cell (under lod pixels), and moves a hit by at most the
  *    ray's path through the cell (sqrt(3) cell edges; tested). An LOD hit
- *    reads light and material from the node's representative leaf (the
- *    leaf nearest the plane's centre), with the leaf's trilinear weights
- *    clamped to its box, and has the plane's normal. Rays without a
+ *    has the plane's normal, its material from the node's representative
+ *    leaf (the leaf nearest the plane's centre: hit->splat is that leaf's
+ *    splat), and names the node: hit->leaf = leaf_count + node, whose
+ *    light site holds the filtered light of the node's leaves
+ *    (iso_sites.h). Rays without a
  *    footprint (spread 0: the reference's, and the bake's unless it sets
  *    a ray cone, bake/transport.h) and lod = 0 always reach the leaves,
  *    bit for bit as without coarse patches. A ray spawned on the surface
@@ -196,7 +198,9 @@ void sg_iso_destroy(sg_iso *iso);
  * no patch on it so far was positive (it started inside), as
  * sg_scene_intersect does. Fills t, p, n (trilinear interpolation of the
  * corner normals, turned to the crossing's side), splat (the leaf's
- * representative splat) and leaf (its index). Returns 1 on a hit, else 0
+ * representative splat) and leaf (its index; leaf_count + node for a hit
+ * on an inner node's coarse patch, "Levels of detail" above). Returns 1
+ * on a hit, else 0
  * with hit->splat = SG_INVALID_ID. stats may be NULL; for the ISO,
  * stats->isects counts leaves whose cubic was examined and
  * stats->splats the candidate roots solved for. */

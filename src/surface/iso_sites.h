@@ -17,6 +17,17 @@
  * corners outnumber the splats (2.6 : 1 on the dragon) and are only
  * interpolated to.
  *
+ * After the corners come the node sites, one for each inner node with a
+ * coarse patch (iso.h, "Levels of detail"), in depth-first order: the
+ * cell's centre moved onto the node's plane (clamped into the cell), the
+ * plane's normal, the representative leaf's splat's colour and reach.
+ * They are never sample points (view.unsampled); once the bake has light
+ * at the corners, sg_iso_sites_filter sets each to the area-weighted mean
+ * of the light of the leaves below its node (each leaf the mean of its 8
+ * corners, weighed by its face area), which an LOD hit reads: the light
+ * of the surface the pixel covers, not a point sample of it (Kashyap
+ * 2010, ch. 4: inner nodes hold filtered attributes).
+ *
  * Use:
  *     sg_iso_sites s; sg_iso_sites_create(iso, &points, &s, &err);
  *     n = sg_iso_hit_sites(iso, &s, &hit, ids, w, 8);
@@ -39,9 +50,15 @@ typedef struct sg_iso_sites {
     float *data;    /* the one allocation behind view's 10 arrays       */
     uint32_t *splat; /* per site: the splat giving its colour (and a
                         spawned ray's self radius, sg_scene_site_hit)   */
+    uint32_t *node_site; /* per inner node: its site, SG_INVALID_ID where
+                            it has no coarse patch                      */
+    uint8_t *unsampled;  /* per site: 1 for node sites (view.unsampled) */
+    size_t corner_sites; /* sites [0, corner_sites) are the corners     */
+    size_t node_count;   /* entries of node_site: the ISO's inner nodes */
 } sg_iso_sites;
 
-/* Errors: SG_ERR_NOMEM. On failure *out is zeroed. */
+/* Errors: SG_ERR_NOMEM; SG_ERR_INVALID_ARG for 2^32 - 1 sites or more. On
+ * failure *out is zeroed. */
 sg_status sg_iso_sites_create(const sg_iso *iso, const sg_pointset *points, sg_iso_sites *out, sg_error *err);
 
 /* Zeroes the struct; a zeroed struct is a no-op. */
@@ -50,13 +67,21 @@ void sg_iso_sites_free(sg_iso_sites *s);
 /* The 8 corners of the hit's leaf and their trilinear weights at hit->p
  * (clamped into the leaf's box; sum 1), largest first is not promised.
  * Writes at most max entries, the largest weights renormalised when
- * max < 8; returns the count (0 for a hit without a leaf). */
+ * max < 8; returns the count (0 for a hit without a leaf). An LOD hit
+ * (hit->leaf = leaf_count + node) gives its node's site, weight 1. */
 int sg_iso_hit_sites(const sg_iso *iso, const sg_iso_sites *s, const sg_hit *hit, uint32_t *ids, float *weights,
                      int max);
 
 /* The corner of the hit's leaf nearest hit->p (the largest trilinear
  * weight); SG_INVALID_ID for a hit without a leaf. */
 uint32_t sg_iso_hit_site(const sg_iso *iso, const sg_iso_sites *s, const sg_hit *hit);
+
+/* Sets every node site's values (stride <= 16 floats a site) to the
+ * area-weighted mean of its leaves' (each the mean of its 8 corners;
+ * weight: the leaf's face area, edge^2). Means of finite values stay
+ * finite, of non-negative ones non-negative. */
+#define SG_ISO_FILTER_STRIDE_MAX 16 /* as sg_scene_filter_sites */
+void sg_iso_sites_filter(const sg_iso *iso, const sg_iso_sites *s, float *values, size_t stride);
 
 /* Bytes held behind s (for the scene's memory report). */
 size_t sg_iso_sites_memory(const sg_iso_sites *s);

@@ -502,6 +502,8 @@ void sg_scene_filter_sites(const sg_scene *sc, float *values, size_t stride)
 {
     if (sc->hybrid)
         sg_hybrid_sites_filter(sc->hybrid, &sc->hybrid_sites, values, stride);
+    else if (sc->iso)
+        sg_iso_sites_filter(sc->iso, &sc->iso_sites, values, stride);
 }
 
 const sg_pointset *sg_scene_points(const sg_scene *sc) { return &sc->points; }

@@ -205,8 +205,9 @@ uint32_t sg_scene_hit_site(const sg_scene *scene, const sg_hit *hit);
  * theirs: values holds `stride` floats per site (sites.h order; stride <=
  * 16). The hybrid's node sites become the area-weighted mean of their
  * triangles' vertex values (hybrid_scene.h), Ye's filtered attributes
- * for level-of-detail hits; every other model has none (no-op). The bake
- * runs it on its final light. */
+ * for level-of-detail hits; the ISO's node sites the area-weighted mean
+ * of their leaves' corner values (iso_sites.h); the point models have
+ * none (no-op). The bake runs it on its final light. */
 void sg_scene_filter_sites(const sg_scene *scene, float *values, size_t stride);
 
 /* The scalar reference of sg_scene_hit_sites: every splat of the leaf

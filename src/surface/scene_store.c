@@ -451,7 +451,8 @@ static sg_status check_iso(const sg_iso *o, size_t splats, const char *label, sg
     if (o->max_depth < 2 || o->max_depth > ISO_MAX_DEPTH || !isfinite(o->lo.x) || !isfinite(o->lo.y) ||
         !isfinite(o->lo.z) || !(o->edge > 0.0f) || !isfinite(o->edge) ||
         !same_bits(o->unit, o->edge / (float)(1u << o->max_depth)) || !isfinite(o->f_scale) || o->f_scale < 0.0f ||
-        o->node_count > UINT32_MAX || o->leaf_count > UINT32_MAX || o->corner_count > UINT32_MAX)
+        o->node_count > UINT32_MAX || o->leaf_count > UINT32_MAX || o->corner_count > UINT32_MAX ||
+        o->leaf_count + o->node_count >= SG_INVALID_ID) /* LOD hits name leaf_count + node (iso.h) */
         return sg_error_set(err, SG_ERR_CORRUPT,
                             "%s: octree header out of range (max depth %d, edge %g, unit %g, f scale %g)", label,
                             o->max_depth, (double)o->edge, (double)o->unit, (double)o->f_scale);

@@ -14,6 +14,8 @@
 #include "points/primitives.h"
 #include "render/world.h"
 #include "surface/iso.h"
+#include "surface/iso_int.h" /* node cells and links, for the filter check */
+#include "surface/iso_sites.h"
 #include "surface/scene.h"
 
 static const float PI = 3.14159265358979f;
@@ -706,8 +708,8 @@ static void packets_match_single_bunny(int side, int max_step, int packets, uint
                      (double)eye.y, (double)eye.z, x, y, step);
             unsigned alone = check_packet(iso, width, rays, mask, got, got_hits, where, &checked, &hits);
             for (int r = 0; r < width; ++r) {
-                if (!(alone >> r & 1u))
-                    continue;
+                if (!(alone >> r & 1u) || got_hits[r].leaf >= info.leaf_count)
+                    continue; /* a miss, or an LOD hit (it names its node: iso.h) */
                 /* the traversal's normal kernel equals its scalar reference */
                 sg_vec3 uvw = sg_v3(sg_test_rand01(&rng), sg_test_rand01(&rng), sg_test_rand01(&rng));
                 if (q % 4 == 0) /* the box's faces and corners */
@@ -843,9 +845,11 @@ static void test_iso_lod_against_full_detail(void **state)
                 ray.spread = 2.0f * tanf(20.0f * PI / 180.0f) / (float)N; /* a pixel's angle, about */
                 sg_hit h;
                 int got = sg_iso_intersect(iso, &ray, &h, &st);
-                if (got && (h.leaf >= info.leaf_count || sg_v3_dot(h.n, ray.dir) >= 0.0f))
+                /* a leaf, or (lod > 0) an inner node: leaf_count + node (iso.h) */
+                const size_t named = lod > 0.0f ? info.leaf_count + info.node_count : info.leaf_count;
+                if (got && (h.leaf >= named || sg_v3_dot(h.n, ray.dir) >= 0.0f))
                     fail_msg("lod %g pixel (%d, %d): leaf %u of %zu, normal . dir %g", (double)lod, x, y, h.leaf,
-                             info.leaf_count, (double)sg_v3_dot(h.n, ray.dir));
+                             named, (double)sg_v3_dot(h.n, ray.dir));
                 if (li == 0) {
                     h_full[i] = (uint8_t)got;
                     t_full[i] = got ? h.t : 0.0f;
@@ -1101,6 +1105,143 @@ static void test_iso_threads_identical(void **state)
     sg_pointset_free(&ps);
 }
 
+/* 9c. The inner nodes' filtered light (iso_sites.h). Node sites: one per
+ * inner node with a coarse patch, after the corners, unsampled, on the
+ * node's plane inside its cell. sg_iso_sites_filter gives each the
+ * area-weighted mean (face area: edge^2) of the leaves whose boxes lie in
+ * its node's cell, each leaf the mean of its 8 corners: checked against
+ * that mean found here by box containment, not the octree's links, on
+ * random corner values (a constant channel stays constant). An LOD hit
+ * reads its node's site alone, weight 1. Fails with the leaves counted
+ * alike (0.435 against 0.472) and with a hit naming the next site. */
+typedef struct cell_box {
+    sg_aabb box;
+    uint32_t node;
+} cell_box;
+
+/* The cell of every inner node below q (at x, y, z, `size` grid units). */
+static void node_cells(const sg_iso *iso, uint32_t q, uint32_t x, uint32_t y, uint32_t z, uint32_t size,
+                       cell_box *out, size_t *n)
+{
+    const float u = iso->unit;
+    const sg_vec3 lo = sg_v3(iso_coord(iso->lo.x, u, x), iso_coord(iso->lo.y, u, y), iso_coord(iso->lo.z, u, z));
+    const sg_vec3 hi = sg_v3(iso_coord(iso->lo.x, u, x + size), iso_coord(iso->lo.y, u, y + size),
+                             iso_coord(iso->lo.z, u, z + size));
+    out[(*n)++] = (cell_box){{lo, hi}, q};
+    const iso_node *N = &iso->nodes[q];
+    uint32_t hs = size >> 1, inner = 0;
+    for (unsigned k = 0; k < 8; ++k)
+        if ((N->child_mask >> k & 1u) && !(N->leaf_mask >> k & 1u))
+            node_cells(iso, N->inner_base + inner++, x + (k & 1 ? hs : 0), y + (k & 2 ? hs : 0), z + (k & 4 ? hs : 0),
+                       hs, out, n);
+}
+
+static int box_inside(const sg_aabb *a, const sg_aabb *b)
+{
+    return a->lo.x >= b->lo.x && a->lo.y >= b->lo.y && a->lo.z >= b->lo.z && a->hi.x <= b->hi.x &&
+           a->hi.y <= b->hi.y && a->hi.z <= b->hi.z;
+}
+
+static void test_iso_node_sites_filtered(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 4000);
+    sg_iso *iso = build_iso(&ps, 0);
+    sg_iso_sites s;
+    sg_error err = {0};
+    assert_int_equal(sg_iso_sites_create(iso, &ps, &s, &err), SG_OK);
+    const size_t corners = iso->corner_count, nodes = iso->node_count, leaves = iso->leaf_count;
+    assert_int_equal(s.corner_sites, corners);
+    cell_box *cells = sg_alloc_array(nodes, sizeof *cells);
+    sg_aabb *boxes = sg_alloc_array(leaves, sizeof *boxes);
+    assert_true(cells && boxes);
+    size_t nc = 0;
+    node_cells(iso, 0, 0, 0, 0, 1u << iso->max_depth, cells, &nc);
+    assert_int_equal(nc, nodes);
+    sg_iso_leaf_boxes(iso, boxes);
+    /* the sites: corners sampled, node sites not, one per patched node */
+    size_t with = 0;
+    for (size_t i = 0; i < s.view.count; ++i)
+        assert_int_equal(s.unsampled[i], i >= corners);
+    for (size_t k = 0; k < nc; ++k) {
+        const uint32_t q = cells[k].node, id = s.node_site[q];
+        assert_int_equal(id == SG_INVALID_ID, iso->nodes[q].lod.leaf == ISO_NO_LOD);
+        if (id == SG_INVALID_ID)
+            continue;
+        ++with;
+        assert_true(id >= corners && id < s.view.count);
+        const sg_vec3 p = sg_sites_position(&s.view, id), lo = cells[k].box.lo, hi = cells[k].box.hi;
+        if (!(p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z))
+            fail_msg("node %u: its site (%g %g %g) lies outside its cell", q, (double)p.x, (double)p.y, (double)p.z);
+        assert_float_equal(sg_v3_length(sg_sites_normal(&s.view, id)), 1.0f, 1e-5f);
+    }
+    assert_int_equal(with, s.view.count - corners);
+    assert_true(with > nodes / 2);
+    /* the filter against containment */
+    enum { STRIDE = 2 };
+    float *v = sg_alloc_array(STRIDE * s.view.count, sizeof *v);
+    assert_non_null(v);
+    uint64_t rng = 77;
+    for (size_t i = 0; i < s.view.count; ++i) {
+        v[STRIDE * i] = i < corners ? sg_test_rand01(&rng) : -1.0f; /* node sites: overwritten */
+        v[STRIDE * i + 1] = 0.25f;
+    }
+    sg_iso_sites_filter(iso, &s, v, STRIDE);
+    double worst = 0.0;
+    for (size_t k = 0; k < nc; ++k) {
+        const uint32_t id = s.node_site[cells[k].node];
+        if (id == SG_INVALID_ID)
+            continue;
+        double sum = 0.0, w = 0.0;
+        for (size_t l = 0; l < leaves; ++l) {
+            if (!box_inside(&boxes[l], &cells[k].box))
+                continue;
+            const double edge = (double)(boxes[l].hi.x - boxes[l].lo.x), a = edge * edge;
+            for (int c = 0; c < 8; ++c)
+                sum += a / 8.0 * (double)v[STRIDE * iso->leaves[l].corner[c]];
+            w += a;
+        }
+        assert_true(w > 0.0);
+        const double want = sum / w, got = v[STRIDE * id];
+        worst = fmax(worst, fabs(got - want));
+        /* the filter's weights are exact powers of two; these are the
+         * float box edges' (rounded to 1e-7 of the cube): 1e-5 covers
+         * them and the float result, with values in [0, 1] */
+        if (!(fabs(got - want) <= 1e-5) || v[STRIDE * id + 1] != 0.25f)
+            fail_msg("node site %u: filtered %.9g, the leaves in its cell give %.9g; constant %.9g", id, got, want,
+                     (double)v[STRIDE * id + 1]);
+    }
+    printf("node sites: %zu of %zu nodes, filter within %.3g of the containment means\n", with, nodes, worst);
+    /* an LOD hit reads its node's site */
+    sg_iso_set_lod(iso, 8.0f);
+    int lod_hits = 0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            sg_ray ray = camera_ray(sg_v3(0.3f, 0.5f, 9.0f), sg_v3(0, 0, 0), 64, x, y);
+            ray.spread = 2.0f * tanf(20.0f * PI / 180.0f) / 64.0f;
+            sg_hit h;
+            if (!sg_iso_intersect(iso, &ray, &h, NULL) || h.leaf < leaves)
+                continue;
+            uint32_t ids[8];
+            float wts[8];
+            const int n = sg_iso_hit_sites(iso, &s, &h, ids, wts, 8);
+            const uint32_t want = s.node_site[h.leaf - leaves];
+            if (n != 1 || ids[0] != want || wts[0] != 1.0f)
+                fail_msg("LOD hit on node %zu: %d sites, first %u (want its site %u)", (size_t)(h.leaf - leaves), n,
+                         n ? ids[0] : 0u, want);
+            ++lod_hits;
+        }
+    printf("LOD hits reading their node's site: %d\n", lod_hits);
+    assert_true(lod_hits > 100);
+    sg_free(v);
+    sg_free(cells);
+    sg_free(boxes);
+    sg_iso_sites_free(&s);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
 /* 9b. The bake's rays from the ISO's light sites (its corners): a site
  * moves onto the surface along its normal (bake/transport.c
  * site_on_surface) and spawns rays over its side's hemisphere. A floor's
@@ -1234,6 +1375,7 @@ int main(void)
         cmocka_unit_test(test_iso_crevice_open),
         cmocka_unit_test(test_iso_threads_identical),
         cmocka_unit_test(test_iso_sites_rays_leave_floor),
+        cmocka_unit_test(test_iso_node_sites_filtered),
         cmocka_unit_test(test_iso_rejects_bad_input),
         cmocka_unit_test(test_iso_alloc_faults),
     };
