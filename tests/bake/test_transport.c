@@ -194,6 +194,21 @@ static void furnace_frame(const sg_bake *b, const sg_world *w, sg_vec3 eye, sg_v
     sg_image_free(&img);
 }
 
+/* The looked-up frame of a default bake of the scene `json` from eye
+ * towards look (furnace_frame). */
+static void furnace_bake(const char *json, sg_vec3 eye, sg_vec3 look, double expect, double *mean, double *worst)
+{
+    sg_world *w = sg_test_world_from_json(json);
+    sg_bake_desc d = {.photons = {.seed = 5}};
+    sg_bake *b = NULL;
+    sg_error err = {0};
+    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
+        fail_msg("bake: %s", err.message);
+    furnace_frame(b, w, eye, look, expect, mean, worst);
+    sg_bake_destroy(b);
+    sg_world_destroy(w);
+}
+
 /* 4. White furnace (albedo 1, uniform sky L): the sites' weights are scaled
  * to integrate cos exactly, so every site's E0 ratio + indirect is E0 and
  * the solve has nothing to add noise to: each covered pixel is L to the
@@ -217,20 +232,12 @@ static void white_furnace_every_pixel(const char *model)
              "\"material\":{\"albedo\":[1,1,1],\"use_point_colors\":false},\"surface\":{\"model\":\"%s\"}}],"
              "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}",
              model, model, model);
-    sg_world *w = sg_test_world_from_json(json);
-    sg_bake_desc d = {.photons = {.seed = 5}};
-    sg_bake *b = NULL;
-    sg_error err = {0};
-    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
-        fail_msg("bake: %s", err.message);
     double mean, worst;
-    furnace_frame(b, w, sg_v3(0, 3.0f, 5.0f), sg_v3(0, 0.8f, 0), 0.7, &mean, &worst);
+    furnace_bake(json, sg_v3(0, 3.0f, 5.0f), sg_v3(0, 0.8f, 0), 0.7, &mean, &worst);
     fprintf(stderr, "white furnace (%s): mean %.5f (0.7), largest pixel deviation %.4f\n", model, mean, worst);
     if (!(fabs(mean / 0.7 - 1.0) <= 0.005) || !(worst <= 0.01))
         fail_msg("furnace (%s): mean %.5f (0.7 within 0.5%%), a pixel %.2f%% off (bound 1%%)", model, mean,
                  100 * worst);
-    sg_bake_destroy(b);
-    sg_world_destroy(w);
 }
 
 static void test_transport_white_furnace_every_pixel(void **state)
@@ -266,22 +273,14 @@ static void test_transport_white_furnace_every_pixel_hybrid(void **state)
 static void test_transport_white_furnace_room(void **state)
 {
     (void)state;
-    sg_world *w = sg_test_world_from_json(
-        "{\"models\":[{\"builtin\":\"room\",\"points\":40000,\"material\":{\"albedo\":[1,1,1],"
-        "\"use_point_colors\":false},\"surface\":{\"model\":\"hybrid\"}}],"
-        "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}");
-    sg_bake_desc d = {.photons = {.seed = 5}};
-    sg_bake *b = NULL;
-    sg_error err = {0};
-    if (sg_bake_create(w, &d, &b, &err) != SG_OK)
-        fail_msg("bake: %s", err.message);
     double mean, worst;
-    furnace_frame(b, w, sg_v3(-1.75f, 1.55f, 1.6f), sg_v3(0.6f, 0.7f, -0.6f), 0.7, &mean, &worst);
+    furnace_bake("{\"models\":[{\"builtin\":\"room\",\"points\":40000,\"material\":{\"albedo\":[1,1,1],"
+                 "\"use_point_colors\":false},\"surface\":{\"model\":\"hybrid\"}}],"
+                 "\"envmap\":{\"builtin\":\"uniform\",\"radiance\":[0.7,0.7,0.7]}}",
+                 sg_v3(-1.75f, 1.55f, 1.6f), sg_v3(0.6f, 0.7f, -0.6f), 0.7, &mean, &worst);
     fprintf(stderr, "white furnace (hybrid room): mean %.6f (0.7), largest pixel deviation %.2e\n", mean, worst);
     if (!(worst <= 2e-4))
         fail_msg("furnace in the room: mean %.6f (0.7), a pixel %.2e off (bound 2e-4)", mean, worst);
-    sg_bake_destroy(b);
-    sg_world_destroy(w);
 }
 
 /* 5. Light per side. From the centre of a closed sphere under the sky the
