@@ -266,8 +266,8 @@ static sg_status make_lattice(sg_hybrid *h, float spacing, const char *name, sg_
             for (uint32_t j = 0; i + j <= n; ++j) {
                 const double w1 = (double)i / n, w2 = (double)j / n, w0 = 1.0 - w1 - w2;
                 const size_t id = sg_hybrid__lattice_id(first, n, i, j);
-                /* The position a 1000th of a cell inside the triangle (towards
-                 * its centroid): a site on its edge, where a room's wall
+                /* The position SHRINK (3/1000) of a cell inside the triangle
+                 * (towards its centroid): a site on its edge, where a room's wall
                  * meets the floor, would start the bake's rays on the other
                  * wall's plane, and a crossing of a triangle metres wide at
                  * t ~ 0 rounds either way: 5.7% of those rays went through

@@ -316,13 +316,13 @@ sg_status sg_scene_create_mesh(const sg_scene_desc *desc, const sg_mesh *mesh, c
     if (!isfinite(d.hybrid_lod))
         return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: hybrid lod %g is not finite", label,
                             (double)d.hybrid_lod);
+    if (!isfinite(d.hybrid_site_spacing))
+        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: hybrid site spacing %g is not finite", label,
+                            (double)d.hybrid_site_spacing);
     sg_scene *sc = sg_calloc_array(1, sizeof *sc);
     if (!sc)
         return sg_error_set(err, SG_ERR_NOMEM, "scene: out of memory");
     sc->desc = d;
-    if (!isfinite(d.hybrid_site_spacing))
-        return sg_error_set(err, SG_ERR_INVALID_ARG, "%s: hybrid site spacing %g is not finite", label,
-                            (double)d.hybrid_site_spacing);
     sg_hybrid_desc hd = {.threads = d.threads, .name = label,
                          .site_spacing = d.hybrid_site_spacing > 0.0f ? d.hybrid_site_spacing : 0.0f};
     sg_status st = sg_hybrid_create(&hd, mesh, &sc->hybrid, err);

@@ -1765,6 +1765,13 @@ static void test_hybrid_lattice_sites(void **state)
         assert_int_equal(sg_hybrid_create(&d, &two, &h, &err), SG_ERR_INVALID_ARG);
         assert_non_null(strstr(err.message, "plane: site spacing"));
     }
+    /* the scene refuses a non-finite spacing before it allocates (a NaN
+     * once returned with the scene leaked: valgrind's case here) */
+    sg_scene *none = NULL;
+    sg_scene_desc sdn = {.model = SG_SURFACE_HYBRID, .hybrid_site_spacing = NAN};
+    assert_int_equal(sg_scene_create_mesh(&sdn, &two, "plane", &none, &err), SG_ERR_INVALID_ARG);
+    assert_null(none);
+    assert_non_null(strstr(err.message, "plane: hybrid site spacing"));
     sg_hybrid_desc tiny = {.site_spacing = 1e-4f, .name = "plane"};
     assert_int_equal(sg_hybrid_create(&tiny, &two, &h, &err), SG_ERR_INVALID_ARG);
     assert_non_null(strstr(err.message, "lattice rows, more than 8192"));
