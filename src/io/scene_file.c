@@ -1047,6 +1047,12 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
                 h_u64(&h, 0x4c415454u); /* "LATT" */
                 h_f32(&h, m->surface.hybrid_site_spacing);
             }
+            /* Since stop 32 a hybrid's vertices, and so its light sites,
+             * are numbered in leaf order (hybrid_int.h invariant 5): a
+             * bake or a world file of before names them in the mesh's
+             * order, with the same count. */
+            if (m->surface.model == SG_SURFACE_HYBRID)
+                h_u64(&h, 0x564f5244u); /* "VORD" */
         }
     }
     if (parts & SG_SCENE_HASH_ENV) {

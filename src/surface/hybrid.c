@@ -184,6 +184,48 @@ static sg_status make_normals(sg_hybrid *h, const sg_mesh *m, const uint32_t *tr
 }
 
 
+/* Invariant 5: the vertices numbered by first use in leaf order (those no
+ * traced triangle uses after them, in mesh order), so that a leaf's
+ * vertices lie in a few consecutive cache lines instead of wherever the
+ * mesh file put them (the dragon: 4.0 lines a leaf instead of 5.8). Copies
+ * the positions and colours into h in that order, permutes h->vnormal and
+ * renames the vertex ids of h->tri. */
+static sg_status renumber_vertices(sg_hybrid *h, const sg_mesh *mesh, const char *name, sg_error *err)
+{
+    const size_t nv = mesh->vertex_count, nt = h->info.triangle_count;
+    uint32_t *to = sg_alloc_array(nv, sizeof *to);
+    uint32_t *vn = h->vnormal ? sg_alloc_array(nv, sizeof *vn) : NULL;
+    if (!to || (h->vnormal && !vn)) {
+        sg_free(to);
+        sg_free(vn);
+        return sg_error_set(err, SG_ERR_NOMEM, "%s: out of memory for %zu vertices", name, nv);
+    }
+    memset(to, 0xFF, nv * sizeof *to);
+    uint32_t next = 0;
+    for (size_t i = 0; i < 3 * nt; ++i)
+        if (to[h->tri[i]] == UINT32_MAX)
+            to[h->tri[i]] = next++;
+    for (size_t v = 0; v < nv; ++v)
+        if (to[v] == UINT32_MAX)
+            to[v] = next++;
+    assert(next == nv);
+    for (size_t i = 0; i < 3 * nt; ++i)
+        h->tri[i] = to[h->tri[i]];
+    for (size_t v = 0; v < nv; ++v) {
+        memcpy(h->pos + 3 * (size_t)to[v], mesh->positions + 3 * v, 3 * sizeof *h->pos);
+        if (h->vcolor)
+            memcpy(h->vcolor + 3 * (size_t)to[v], mesh->colors + 3 * v, 3 * sizeof *h->vcolor);
+        if (vn)
+            vn[to[v]] = h->vnormal[v];
+    }
+    if (vn) {
+        sg_free(h->vnormal);
+        h->vnormal = vn;
+    }
+    sg_free(to);
+    return SG_OK;
+}
+
 /* How far lattice sites sit inside their triangle, in cells (make_lattice). */
 #define SHRINK 3e-3
 
@@ -384,12 +426,11 @@ sg_status sg_hybrid_create(const sg_hybrid_desc *desc, const sg_mesh *mesh, sg_h
     }
     sg_free(h->tree.order); /* invariant 3 */
     h->tree.order = NULL;
-    memcpy(h->pos, mesh->positions, nv * 3 * sizeof *h->pos);
-    if (h->vcolor)
-        memcpy(h->vcolor, mesh->colors, nv * 3 * sizeof *h->vcolor);
     sg_free(ctri);
     ctri = NULL;
-    h->info.triangle_count = count; /* make_lattice reads it */
+    h->info.triangle_count = count; /* renumber_vertices and make_lattice read it */
+    if ((st = renumber_vertices(h, mesh, name, err)) != SG_OK)
+        goto fail;
     if (d.site_spacing > 0.0f && (st = make_lattice(h, d.site_spacing, name, err)) != SG_OK)
         goto fail;
 

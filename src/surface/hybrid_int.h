@@ -15,7 +15,12 @@
  *     barycentric (i / n, j / n), i + j <= n, weights of v[1] and v[2],
  *     row i first (sg_hybrid__lattice_id). They are vertices to every
  *     site query (position, normal, colour interpolated over the
- *     triangle) but no traced triangle names them.
+ *     triangle) but no traced triangle names them;
+ *  5. the mesh's vertices are numbered by first use in leaf order (walking
+ *     tri from its start), those no traced triangle uses after them in the
+ *     mesh's order: a leaf's vertices lie in a few consecutive cache lines
+ *     (hybrid.c renumber_vertices); pos, vnormal and vcolor follow that
+ *     numbering.
  * A hierarchy loaded from a world file (scene_store.c) has been checked
  * for everything a traversal indexes with (child words, leaf ranges,
  * vertex ids, depth) and for NaN, not for invariant 1's tightness.

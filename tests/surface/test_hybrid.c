@@ -1830,6 +1830,74 @@ static void test_hybrid_builtin_room_lattice(void **state)
     sg_mesh_free(&grid);
 }
 
+/* Invariant 5 of hybrid_int.h: the vertices are numbered by first use in
+ * leaf order, unused ones last, whatever order the mesh gave them in. The
+ * sphere with its vertices shuffled (and one unused vertex put among them)
+ * gives, slot for slot, the same triangles' vertex ids, positions, normals
+ * and colours as the sphere in its own order; walking the triangles in
+ * leaf order meets the ids 0, 1, 2, ... each first, and the unused vertex
+ * keeps its position and colour at the last id. Fails with the mesh's
+ * numbering kept (the shuffled ids). */
+static void test_hybrid_vertices_in_leaf_order(void **state)
+{
+    (void)state;
+    sg_mesh a = sphere_mesh(24, 48);
+    sg_free(a.normals); /* computed from the triangles, in both */
+    a.normals = NULL;
+    const size_t nv = a.vertex_count + 1, nt = a.triangle_count;
+    a.colors = sg_alloc_array(a.vertex_count, 3 * sizeof(float));
+    assert_non_null(a.colors);
+    for (size_t i = 0; i < 3 * a.vertex_count; ++i)
+        a.colors[i] = (float)(i % 97) / 97.0f;
+    /* b: a's vertices at shuffled[v], the unused one at its middle */
+    uint32_t *at = sg_alloc_array(nv, sizeof *at);
+    sg_mesh b = {.vertex_count = nv, .triangle_count = nt};
+    b.positions = sg_alloc_array(nv, 3 * sizeof(float));
+    b.colors = sg_alloc_array(nv, 3 * sizeof(float));
+    b.triangles = sg_alloc_array(nt, 3 * sizeof(uint32_t));
+    assert_true(at && b.positions && b.colors && b.triangles);
+    for (size_t v = 0; v < nv; ++v)
+        at[v] = (uint32_t)v;
+    uint64_t rng = 17;
+    for (size_t v = nv - 1; v > 0; --v) { /* Fisher-Yates */
+        size_t j = (size_t)(sg_test_rand01(&rng) * (float)(v + 1));
+        j = j > v ? v : j;
+        uint32_t t = at[v];
+        at[v] = at[j];
+        at[j] = t;
+    }
+    const float unused[3] = {7.0f, 8.0f, 9.0f}, unused_rgb[3] = {0.25f, 0.5f, 0.75f};
+    for (size_t v = 0; v < nv; ++v) {
+        const int extra = v == a.vertex_count; /* the unused vertex */
+        memcpy(b.positions + 3 * (size_t)at[v], extra ? unused : a.positions + 3 * v, 3 * sizeof(float));
+        memcpy(b.colors + 3 * (size_t)at[v], extra ? unused_rgb : a.colors + 3 * v, 3 * sizeof(float));
+    }
+    for (size_t i = 0; i < 3 * nt; ++i)
+        b.triangles[i] = at[a.triangles[i]];
+    sg_hybrid *ha = build(&a, 2), *hb = build(&b, 2);
+    assert_int_equal(ha->info.triangle_count, hb->info.triangle_count);
+    uint32_t next = 0;
+    for (size_t i = 0; i < 3 * ha->info.triangle_count; ++i) {
+        const uint32_t va = ha->tri[i], vb = hb->tri[i];
+        if (vb > next)
+            fail_msg("slot %zu corner %zu: vertex %u before vertex %u was used", i / 3, i % 3, vb, next);
+        next += vb == next;
+        if (va != vb || memcmp(ha->pos + 3 * (size_t)va, hb->pos + 3 * (size_t)vb, 3 * sizeof(float)) ||
+            memcmp(ha->vcolor + 3 * (size_t)va, hb->vcolor + 3 * (size_t)vb, 3 * sizeof(float)) ||
+            ha->vnormal[va] != hb->vnormal[vb])
+            fail_msg("slot %zu corner %zu: vertex %u of the sphere, %u of the shuffled sphere differ", i / 3, i % 3,
+                     va, vb);
+    }
+    assert_int_equal(next, a.vertex_count); /* every vertex of the sphere is used */
+    assert_memory_equal(hb->pos + 3 * a.vertex_count, unused, sizeof unused);
+    assert_memory_equal(hb->vcolor + 3 * a.vertex_count, unused_rgb, sizeof unused_rgb);
+    sg_hybrid_destroy(ha);
+    sg_hybrid_destroy(hb);
+    sg_free(at);
+    sg_mesh_free(&a);
+    sg_mesh_free(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1853,6 +1921,7 @@ int main(void)
         cmocka_unit_test(test_hybrid_intersect16_matches_single),
         cmocka_unit_test(test_hybrid_lattice_sites),
         cmocka_unit_test(test_hybrid_builtin_room_lattice),
+        cmocka_unit_test(test_hybrid_vertices_in_leaf_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
