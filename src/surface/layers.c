@@ -32,8 +32,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "accel/cover_grid.h"
 #include "core/alloc.h"
-#include "core/key_slots.h"
 #include "surface/mls.h"
 
 enum { LAYER_PASSES = 3 };
@@ -128,153 +128,29 @@ sg_status sg_layer_keys(const sg_pointset *p, sg_kernel kernel, sg_layer_cover_f
 
 /* ---- the uniform grid ------------------------------------------------------
  *
- * Cells of edge GRID_RADII x the mean radius; each splat is listed in
- * every cell its support's box [p - r, p + r] overlaps (about 8 at the
- * mean radius), so the cell holding p_i lists every j with |p_i - p_j| <
- * r_j (cell indices are floor((x - lo) / h), monotone in x in float, so
- * p_i's cell lies in the range of any box that holds p_i). The cells are
- * kept in a hash on their packed indices (a model is a surface: most of
- * its box's cells are empty). */
-static const float GRID_RADII = 2.0f;
+ * The cell holding p_i lists every j with |p_i - p_j| < r_j (cover_grid.h,
+ * scale 1), in increasing index order. */
 
-typedef struct cover_grid {
-    uint32_t *cell_of;  /* cell of p_i, per splat                        */
-    uint32_t *first;    /* cell c lists items[first[c] .. first[c + 1])  */
-    uint32_t *items;    /* splat indices, increasing within a cell       */
-} cover_grid;
+typedef struct grid_user {
+    const sg_pointset *p;
+    const sg_cover_grid *g;
+} grid_user;
 
 static const uint32_t *grid_cover(const void *user, size_t i, size_t *count)
 {
-    const cover_grid *g = user;
-    uint32_t c = g->cell_of[i];
-    *count = g->first[c + 1] - g->first[c];
-    return g->items + g->first[c];
-}
-
-typedef struct cell_hash {
-    uint64_t *key; size_t count, cap; /* cell keys by cell index          */
-    uint32_t *slot; size_t scap;      /* open addressing: index + 1       */
-} cell_hash;
-
-/* Index of the cell with key k, added if new; UINT32_MAX when out of
- * memory. */
-static uint32_t cell_index(cell_hash *H, uint64_t k)
-{
-    if (!sg_key_slots_reserve(&H->slot, &H->scap, H->key, H->count, 4096))
-        return UINT32_MAX;
-    size_t j;
-    uint32_t c = sg_key_slots_find(H->slot, H->scap, H->key, k, &j);
-    if (c != UINT32_MAX)
-        return c;
-    if (H->count + 1 > H->cap) {
-        size_t nc = H->cap ? H->cap * 2 : 4096;
-        if (!sg_realloc_array((void **)&H->key, H->cap, nc, sizeof *H->key))
-            return UINT32_MAX;
-        H->cap = nc;
-    }
-    H->key[H->count] = k;
-    H->slot[j] = (uint32_t)H->count + 1;
-    return (uint32_t)H->count++;
-}
-
-/* The grid cells [c0, c1] (per axis, inclusive) that splat i's support
- * box overlaps. */
-static void cell_range(const sg_pointset *p, size_t i, const float lo[3], float inv_h, uint32_t c0[3], uint32_t c1[3])
-{
-    float r = p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
-    for (int a = 0; a < 3; ++a) {
-        c0[a] = (uint32_t)((x[a] - r - lo[a]) * inv_h);
-        c1[a] = (uint32_t)((x[a] + r - lo[a]) * inv_h);
-    }
+    const grid_user *u = user;
+    return sg_cover_grid_at(u->g, sg_pointset_position(u->p, i), count);
 }
 
 sg_status sg_layer_keys_grid(const sg_pointset *p, sg_kernel kernel, uint32_t *key, size_t *keyed_count,
                              sg_error *err)
 {
-    size_t n = p->count;
-    double rsum = 0.0;
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; ++i) {
-        float r = p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
-        rsum += r;
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = fminf(lo[a], x[a] - r);
-            hi[a] = fmaxf(hi[a], x[a] + r);
-        }
-    }
-    /* 21 bits of cell index per axis */
-    float h = n ? GRID_RADII * (float)(rsum / (double)n) : 1.0f;
-    for (int a = 0; a < 3; ++a)
-        h = fmaxf(h, (hi[a] - lo[a]) / 2000000.0f);
-    const float inv_h = 1.0f / h;
-    sg_status st = SG_OK;
-    cell_hash H = {0};
-    cover_grid g = {0};
-    uint32_t *fill = NULL;
-    g.cell_of = sg_alloc_array(n ? n : 1, sizeof *g.cell_of);
-    if (!g.cell_of)
-        goto nomem;
-    /* pass 1: the cells and their counts (counts kept in fill, grown with
-     * the cells) */
-    size_t items = 0, fcap = 0;
-    for (size_t i = 0; i < n; ++i) {
-        uint32_t c0[3], c1[3];
-        cell_range(p, i, lo, inv_h, c0, c1);
-        for (uint32_t z = c0[2]; z <= c1[2]; ++z)
-            for (uint32_t y = c0[1]; y <= c1[1]; ++y)
-                for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
-                    uint32_t c = cell_index(&H, sg_key_grid3(xx, y, z));
-                    if (c == UINT32_MAX)
-                        goto nomem;
-                    if (c >= fcap) {
-                        size_t nc = fcap ? fcap * 2 : 4096;
-                        if (!sg_realloc_array((void **)&fill, fcap, nc, sizeof *fill))
-                            goto nomem;
-                        memset(fill + fcap, 0, (nc - fcap) * sizeof *fill);
-                        fcap = nc;
-                    }
-                    ++fill[c];
-                    ++items;
-                }
-        if (items >= UINT32_MAX)
-            goto nomem; /* 32-bit offsets */
-    }
-    g.first = sg_alloc_array(H.count + 1, sizeof *g.first);
-    g.items = sg_alloc_array(items ? items : 1, sizeof *g.items);
-    if (!g.first || !g.items)
-        goto nomem;
-    uint32_t run = 0;
-    for (size_t c = 0; c < H.count; ++c) {
-        g.first[c] = run;
-        run += fill[c];
-        fill[c] = g.first[c];
-    }
-    g.first[H.count] = run;
-    /* pass 2: fill in increasing splat order */
-    for (size_t i = 0; i < n; ++i) {
-        float x[3] = {p->px[i], p->py[i], p->pz[i]};
-        uint32_t c0[3], c1[3];
-        cell_range(p, i, lo, inv_h, c0, c1);
-        for (uint32_t z = c0[2]; z <= c1[2]; ++z)
-            for (uint32_t y = c0[1]; y <= c1[1]; ++y)
-                for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx) {
-                    uint32_t c = cell_index(&H, sg_key_grid3(xx, y, z));
-                    g.items[fill[c]++] = (uint32_t)i;
-                }
-        uint32_t cx = (uint32_t)((x[0] - lo[0]) * inv_h), cy = (uint32_t)((x[1] - lo[1]) * inv_h),
-                 cz = (uint32_t)((x[2] - lo[2]) * inv_h);
-        g.cell_of[i] = cell_index(&H, sg_key_grid3(cx, cy, cz));
-    }
-    st = sg_layer_keys(p, kernel, grid_cover, &g, key, keyed_count, err);
-    goto done;
-nomem:
-    st = sg_error_set(err, SG_ERR_NOMEM, "layer keys: out of memory for the grid of %zu splats", n);
-done:
-    sg_free(H.key);
-    sg_free(H.slot);
-    sg_free(fill);
-    sg_free(g.cell_of);
-    sg_free(g.first);
-    sg_free(g.items);
+    sg_cover_grid g;
+    sg_status st = sg_cover_grid_build(p, 1.0f, &g, err);
+    if (st != SG_OK)
+        return st;
+    grid_user u = {p, &g};
+    st = sg_layer_keys(p, kernel, grid_cover, &u, key, keyed_count, err);
+    sg_cover_grid_free(&g);
     return st;
 }
