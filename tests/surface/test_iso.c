@@ -361,6 +361,48 @@ static void test_iso_sphere_no_holes(void **state)
     sg_pointset_free(&ps);
 }
 
+/* 4b. Gaps between supports are bridged (iso.h SG_ISO_BRIDGE_RADII): the
+ * sphere of test 4 with every radius cut to 0.35 of its value (a third
+ * of the spacing: the supports no longer overlap, the stability map's
+ * radii_small) is still closed: every ray at the centre hits, at the
+ * sphere. Without the bridge about 30% of them went through. */
+static void test_iso_sparse_supports_bridged(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 20000);
+    for (size_t i = 0; i < ps.count; ++i)
+        ps.radius[i] *= 0.35f;
+    float r = max_radius(&ps);
+    sg_iso *iso = build_iso(&ps, 0);
+    uint64_t rng = 5;
+    int misses = 0;
+    float worst = 0.0f;
+    for (int i = 0; i < 20000; ++i) {
+        sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
+        sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            if (misses < 5)
+                fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
+            ++misses;
+            continue;
+        }
+        worst = fmaxf(worst, fabsf(hit.t - 2.0f));
+    }
+    /* depth: the splats' planes are tangent to the sphere, so the MLS
+     * surface lies within the sagitta of the widened support, (2 r)^2 / 2,
+     * of it, plus the patch's tolerance (0.05 r_min) */
+    float bound = 2.0f * r * r + 0.05f * r;
+    printf("sparse supports (r = %g): %d of 20000 rays missed, worst |t - 2| %g (bound %g)\n", (double)r, misses,
+           (double)worst, (double)bound);
+    if (misses || !(worst <= bound))
+        fail_msg("sparse supports: %d of 20000 rays at the centre missed, worst depth error %g (bound %g)", misses,
+                 (double)worst, (double)bound);
+    sg_iso_destroy(iso);
+    sg_pointset_free(&ps);
+}
+
 /* 5. No cracks: axis-parallel rays running exactly along leaf edges (the
  * line shared by four cells) and within leaf faces, through the corners
  * of stored leaves, all hit where the sphere is (the line passes at least
@@ -472,13 +514,16 @@ static void test_iso_holes_stay_open(void **state)
 
 /* 7. Quantisation within its stated bound (iso.h): every corner of the
  * sampled leaves against f and n̄ recomputed from all splats in index
- * order (the build's bits: iso.h sg_iso_field), and the normal codec on
- * random unit vectors. */
-static void test_iso_quantisation_bound(void **state)
+ * order (the build's bits: iso.h sg_iso_field; a bridged corner's over
+ * the widened supports), and the normal codec on random unit vectors; on
+ * the sphere, and on the sphere with its radii cut to 0.35 (test 4b),
+ * whose gaps are bridged. */
+static void quantisation_bound(float radius_scale)
 {
-    (void)state;
     sg_pointset ps = {0};
     make_sphere(&ps, 5000);
+    for (size_t i = 0; i < ps.count; ++i)
+        ps.radius[i] *= radius_scale;
     sg_iso *iso = build_iso(&ps, 0);
     sg_iso_info info;
     sg_iso_get_info(iso, &info);
@@ -488,8 +533,15 @@ static void test_iso_quantisation_bound(void **state)
     assert_non_null(all);
     for (size_t i = 0; i < ps.count; ++i)
         all[i] = (uint32_t)i;
+    /* the bridged corners' field: the same splats with widened supports */
+    sg_pointset wide = ps;
+    wide.radius = malloc(ps.count * sizeof *wide.radius);
+    assert_non_null(wide.radius);
+    for (size_t i = 0; i < ps.count; ++i)
+        wide.radius[i] = SG_ISO_BRIDGE_RADII * ps.radius[i];
     sg_iso_leaf_boxes(iso, boxes);
     float worst_f = 0, worst_n = 0, fmax = 0;
+    int bridged = 0;
     for (size_t l = 0; l < info.leaf_count; l += 5) {
         float f[8];
         sg_vec3 n[8];
@@ -499,6 +551,10 @@ static void test_iso_quantisation_bound(void **state)
             sg_vec3 x = sg_v3(c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z);
             sg_vec3 nt;
             float ft = sg_iso_field(&ps, all, ps.count, SG_KERNEL_HAT, x, &nt);
+            if (isnan(ft)) {
+                ft = sg_iso_field(&wide, all, ps.count, SG_KERNEL_HAT, x, &nt);
+                ++bridged;
+            }
             assert_false(isnan(ft)); /* stored corners are valid */
             worst_f = fmaxf(worst_f, fabsf(ft - f[c]));
             fmax = fmaxf(fmax, fabsf(ft));
@@ -519,19 +575,29 @@ static void test_iso_quantisation_bound(void **state)
         sg_vec3 m = sg_iso_decode_normal(sg_iso_encode_normal(special[i]));
         worst_codec = fmaxf(worst_codec, angle(special[i], m));
     }
-    printf("quantisation: worst |df| %g (bound %g, f_scale %g), worst normal %g, codec %g (bound %g)\n",
-           (double)worst_f, (double)ftol, (double)info.f_scale, (double)worst_n, (double)worst_codec,
-           (double)SG_ISO_NORMAL_EPS);
+    printf("quantisation (radii x %g): worst |df| %g (bound %g, f_scale %g), worst normal %g, codec %g (bound %g); "
+           "%d bridged corners\n",
+           (double)radius_scale, (double)worst_f, (double)ftol, (double)info.f_scale, (double)worst_n,
+           (double)worst_codec, (double)SG_ISO_NORMAL_EPS, bridged);
+    assert_true(radius_scale == 1.0f ? bridged == 0 : bridged > 100);
     /* the corners' normals: the codec's bound plus float rounding of the
      * normalisation (a few ulps) */
     float ntol = SG_ISO_NORMAL_EPS + 1e-6f;
     if (worst_f > ftol || worst_n > ntol || worst_codec > SG_ISO_NORMAL_EPS)
         fail_msg("quantisation: |df| %g (bound %g), corner normal %g (bound %g), codec %g (bound %g)", (double)worst_f,
                  (double)ftol, (double)worst_n, (double)ntol, (double)worst_codec, (double)SG_ISO_NORMAL_EPS);
+    free(wide.radius);
     free(all);
     free(boxes);
     sg_iso_destroy(iso);
     sg_pointset_free(&ps);
+}
+
+static void test_iso_quantisation_bound(void **state)
+{
+    (void)state;
+    quantisation_bound(1.0f);
+    quantisation_bound(0.35f);
 }
 
 /* 8. Face flags: from the centre of a sphere, FRONT_ONLY sees no entry
@@ -1366,6 +1432,7 @@ int main(void)
         cmocka_unit_test(test_iso_intersect16_matches_single_bunny),
         cmocka_unit_test(test_iso_lod_against_full_detail),
         cmocka_unit_test(test_iso_sphere_no_holes),
+        cmocka_unit_test(test_iso_sparse_supports_bridged),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
         cmocka_unit_test(test_iso_holes_stay_open),
         cmocka_unit_test(test_iso_quantisation_bound),
