@@ -38,16 +38,61 @@ static uint32_t add_cell(sg_cover_grid *g, uint64_t k)
     return (uint32_t)g->cell_count++;
 }
 
-/* The cells [c0, c1] (per axis, inclusive) that splat i's scaled support
- * box overlaps. */
-static void cell_range(const sg_cover_grid *g, const sg_pointset *p, size_t i, float scale, uint32_t c0[3],
-                       uint32_t c1[3])
+/* What a pass does with one (cell key, splat) pair; 0 stops the pass (out
+ * of memory). */
+typedef int (*cell_visit)(sg_cover_grid *g, uint64_t key, uint32_t splat, void *user);
+
+/* Calls visit for every cell that splat i's scaled support box overlaps,
+ * in a fixed order; 0 if a visit stopped it. */
+static int for_cells(sg_cover_grid *g, const sg_pointset *p, size_t i, float scale, cell_visit visit, void *user)
 {
     float r = scale * p->radius[i], x[3] = {p->px[i], p->py[i], p->pz[i]};
+    uint32_t c0[3], c1[3];
     for (int a = 0; a < 3; ++a) {
         c0[a] = (uint32_t)((x[a] - r - g->lo[a]) * g->inv_h);
         c1[a] = (uint32_t)((x[a] + r - g->lo[a]) * g->inv_h);
     }
+    for (uint32_t z = c0[2]; z <= c1[2]; ++z)
+        for (uint32_t y = c0[1]; y <= c1[1]; ++y)
+            for (uint32_t xx = c0[0]; xx <= c1[0]; ++xx)
+                if (!visit(g, sg_key_grid3(xx, y, z), (uint32_t)i, user))
+                    return 0;
+    return 1;
+}
+
+/* Pass 1: the cells, and their counts in fill (grown with the cells). */
+typedef struct count_pass {
+    uint32_t *fill;
+    size_t fcap, items;
+} count_pass;
+
+static int count_visit(sg_cover_grid *g, uint64_t key, uint32_t splat, void *user)
+{
+    (void)splat;
+    count_pass *cp = user;
+    uint32_t c = add_cell(g, key);
+    if (c == UINT32_MAX)
+        return 0;
+    if (c >= cp->fcap) {
+        size_t nc = cp->fcap ? cp->fcap * 2 : 4096;
+        if (!sg_realloc_array((void **)&cp->fill, cp->fcap, nc, sizeof *cp->fill))
+            return 0;
+        memset(cp->fill + cp->fcap, 0, (nc - cp->fcap) * sizeof *cp->fill);
+        cp->fcap = nc;
+    }
+    ++cp->fill[c];
+    ++cp->items;
+    return 1;
+}
+
+/* Pass 2: splat into its cells' lists (fill: each list's next slot). */
+static int fill_visit(sg_cover_grid *g, uint64_t key, uint32_t splat, void *user)
+{
+    uint32_t *fill = user;
+    size_t j;
+    uint32_t c = sg_key_slots_find(g->slot, g->slot_cap, g->key, key, &j);
+    g->items[fill[c]++] = splat;
+    return 1;
 }
 
 sg_status sg_cover_grid_build(const sg_pointset *p, float scale, sg_cover_grid *out, sg_error *err)
@@ -68,59 +113,28 @@ sg_status sg_cover_grid_build(const sg_pointset *p, float scale, sg_cover_grid *
     for (int a = 0; a < 3; ++a)
         h = fmaxf(h, (hi[a] - lo[a]) / MAX_CELLS);
     sg_cover_grid g = {.lo = {n ? lo[0] : 0.0f, n ? lo[1] : 0.0f, n ? lo[2] : 0.0f}, .inv_h = 1.0f / h};
-    uint32_t *fill = NULL;
-    size_t items = 0, fcap = 0;
-    /* pass 1: the cells and their counts (kept in fill, grown with the cells) */
-    for (size_t i = 0; i < n; ++i) {
-        uint32_t c0[3], c1[3];
-        cell_range(&g, p, i, scale, c0, c1);
-        for (uint32_t z = c0[2]; z <= c1[2]; ++z)
-            for (uint32_t y = c0[1]; y <= c1[1]; ++y)
-                for (uint32_t x = c0[0]; x <= c1[0]; ++x) {
-                    uint32_t c = add_cell(&g, sg_key_grid3(x, y, z));
-                    if (c == UINT32_MAX)
-                        goto nomem;
-                    if (c >= fcap) {
-                        size_t nc = fcap ? fcap * 2 : 4096;
-                        if (!sg_realloc_array((void **)&fill, fcap, nc, sizeof *fill))
-                            goto nomem;
-                        memset(fill + fcap, 0, (nc - fcap) * sizeof *fill);
-                        fcap = nc;
-                    }
-                    ++fill[c];
-                    ++items;
-                }
-        if (items >= UINT32_MAX)
-            goto nomem; /* 32-bit offsets */
-    }
+    count_pass cp = {0};
+    for (size_t i = 0; i < n; ++i)
+        if (!for_cells(&g, p, i, scale, count_visit, &cp) || cp.items >= UINT32_MAX) /* 32-bit offsets */
+            goto nomem;
     g.first = sg_alloc_array(g.cell_count + 1, sizeof *g.first);
-    g.items = sg_alloc_array(items ? items : 1, sizeof *g.items);
+    g.items = sg_alloc_array(cp.items ? cp.items : 1, sizeof *g.items);
     if (!g.first || !g.items)
         goto nomem;
     uint32_t run = 0;
     for (size_t c = 0; c < g.cell_count; ++c) {
         g.first[c] = run;
-        run += fill[c];
-        fill[c] = g.first[c];
+        run += cp.fill[c];
+        cp.fill[c] = g.first[c];
     }
     g.first[g.cell_count] = run;
-    /* pass 2: the lists, in increasing splat order */
-    for (size_t i = 0; i < n; ++i) {
-        uint32_t c0[3], c1[3];
-        cell_range(&g, p, i, scale, c0, c1);
-        for (uint32_t z = c0[2]; z <= c1[2]; ++z)
-            for (uint32_t y = c0[1]; y <= c1[1]; ++y)
-                for (uint32_t x = c0[0]; x <= c1[0]; ++x) {
-                    size_t j;
-                    uint32_t c = sg_key_slots_find(g.slot, g.slot_cap, g.key, sg_key_grid3(x, y, z), &j);
-                    g.items[fill[c]++] = (uint32_t)i;
-                }
-    }
-    sg_free(fill);
+    for (size_t i = 0; i < n; ++i) /* in increasing splat order */
+        (void)for_cells(&g, p, i, scale, fill_visit, cp.fill);
+    sg_free(cp.fill);
     *out = g;
     return SG_OK;
 nomem:
-    sg_free(fill);
+    sg_free(cp.fill);
     sg_cover_grid_free(&g);
     return sg_error_set(err, SG_ERR_NOMEM, "cover grid: out of memory for the grid of %zu splats", n);
 }

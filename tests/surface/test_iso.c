@@ -335,16 +335,13 @@ static void test_iso_agrees_with_mls_bumpy(void **state)
     sg_pointset_free(&ps);
 }
 
-/* 4. No holes in a closed sphere: every ray aimed at the centre from
- * outside hits (20000 random directions). */
-static void test_iso_sphere_no_holes(void **state)
+/* Rays at the centre of the unit sphere from 20000 random points at
+ * distance 3 (seed rng): how many miss; *worst gets the largest |t - 2|
+ * of those that hit. */
+static int rays_at_centre(const sg_iso *iso, uint64_t rng, float *worst)
 {
-    (void)state;
-    sg_pointset ps = {0};
-    make_sphere(&ps, 50000);
-    sg_iso *iso = build_iso(&ps, 0);
-    uint64_t rng = 3;
     int misses = 0;
+    *worst = 0.0f;
     for (int i = 0; i < 20000; ++i) {
         sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
         sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
@@ -353,8 +350,23 @@ static void test_iso_sphere_no_holes(void **state)
             if (misses < 5)
                 fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
             ++misses;
+            continue;
         }
+        *worst = fmaxf(*worst, fabsf(hit.t - 2.0f));
     }
+    return misses;
+}
+
+/* 4. No holes in a closed sphere: every ray aimed at the centre from
+ * outside hits (20000 random directions). */
+static void test_iso_sphere_no_holes(void **state)
+{
+    (void)state;
+    sg_pointset ps = {0};
+    make_sphere(&ps, 50000);
+    sg_iso *iso = build_iso(&ps, 0);
+    float worst;
+    int misses = rays_at_centre(iso, 3, &worst);
     if (misses)
         fail_msg("%d of 20000 rays at the centre missed", misses);
     sg_iso_destroy(iso);
@@ -375,21 +387,8 @@ static void test_iso_sparse_supports_bridged(void **state)
         ps.radius[i] *= 0.35f;
     float r = max_radius(&ps);
     sg_iso *iso = build_iso(&ps, 0);
-    uint64_t rng = 5;
-    int misses = 0;
-    float worst = 0.0f;
-    for (int i = 0; i < 20000; ++i) {
-        sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
-        sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
-        sg_hit hit;
-        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
-            if (misses < 5)
-                fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
-            ++misses;
-            continue;
-        }
-        worst = fmaxf(worst, fabsf(hit.t - 2.0f));
-    }
+    float worst;
+    int misses = rays_at_centre(iso, 5, &worst);
     /* depth: the splats' planes are tangent to the sphere, so the MLS
      * surface lies within the sagitta of the widened support, (2 r)^2 / 2,
      * of it, plus the patch's tolerance (0.05 r_min) */
