@@ -1035,11 +1035,6 @@ uint64_t sg_scene_file_hash(const sg_scene_file *sf, uint32_t parts)
                  * a world file's key (the models alone), are unchanged. */
                 if (parts & SG_SCENE_HASH_ENV)
                     h_u64(&h, 0x4e4f4445u); /* "NODE" */
-                /* Since stop 32 corners outside every support take the
-                 * bridged field (iso.h SG_ISO_BRIDGE_RADII): the octree
-                 * changes wherever a model has gaps or rims, so world files
-                 * and bakes of before are rebuilt. */
-                h_u64(&h, 0x42524447u); /* "BRDG" */
             }
             /* Light sites on lattices (hybrid.h): the builtin ground (stop
              * 30) and room (stop 31) changed from gridded meshes to two

@@ -35,16 +35,6 @@
  *    invalid corner is not stored and never intersected: that keeps holes
  *    of the point set open (the surface stops within one leaf of the
  *    supports' edge).
- *  - Bridged gaps. Where rule b has gone as fine as it may, an invalid
- *    corner takes the same field over the supports widened
- *    SG_ISO_BRIDGE_RADII times, if the splats there lie on one sheet (no
- *    layered splat, normals within about 25 degrees); such a cell, and a
- *    child of a rule-b cell that lies in a gap between the thick disks,
- *    is then a leaf like any other. So a gap between supports narrower
- *    than that is bridged, as the MLS surface bridges gaps along a ray
- *    (radii underestimated by a scanner or an export leave no holes),
- *    while a hole wider than the widened supports stays open. Everywhere
- *    else the octree is the one without bridging.
  *  - Corners are keyed by their integer coordinates at max_depth and
  *    stored once; leaves index them, so neighbouring leaves of one size
  *    share their face values exactly (no cracks). Where leaves of
@@ -142,12 +132,6 @@ typedef struct sg_iso sg_iso; /* opaque */
  * support, and a 90-degree edge of a cube is rounded off by about 0.2 r:
  * 0.5 r keeps both with margin. */
 #define SG_ISO_SLAB 0.5f
-
-/* How far the supports widen at a bridged corner (above): 2 closes the
- * gaps between splats whose radii are a third of their spacing (the
- * stability map's radii_small: 30.6% of the sphere's pixels were holes
- * before). */
-#define SG_ISO_BRIDGE_RADII 2.0f
 
 /* Root accuracy: the root's parameter within this fraction of the leaf's
  * ray span (<= sqrt(3) x the leaf edge) of the patch's exact zero. */
@@ -275,9 +259,7 @@ uint64_t sg_iso_checksum(const sg_iso *iso);
 /* The corner value f at x as the build computes it (before quantisation)
  * from splats idx[0..count) (every splat whose support contains x must be
  * among them, in increasing index order, for the build's bits); returns
- * NAN where x has no value. *n (may be NULL) gets n̄. The build's bridged
- * value is this function on the point set with every radius times
- * SG_ISO_BRIDGE_RADII. For tests. */
+ * NAN where x is invalid. *n (may be NULL) gets n̄. For tests. */
 float sg_iso_field(const sg_pointset *ps, const uint32_t *idx, size_t count, sg_kernel kernel, sg_vec3 x,
                    sg_vec3 *n);
 

@@ -6,9 +6,7 @@
  * Every point where f is evaluated lies on the box of the cell that asks,
  * so that list holds every splat of non-zero weight there; the lists keep
  * increasing splat order and sg_mls_field_indexed skips zero weights, so f
- * at a grid point is the same bits whichever cell computes it. A bridged
- * value (iso.h SG_ISO_BRIDGE_RADII) reads its widened supports from a grid
- * of the whole point set instead (cover_grid.h), for the same reason.
+ * at a grid point is the same bits whichever cell computes it.
  *
  * Parallelism: the first TOP_LEVELS levels are split serially; each kept
  * cell at that level is a task that builds its subtree ("part") into its
@@ -18,9 +16,8 @@
  * use. Nothing in the result depends on which thread built what.
  *
  * Invariants:
- *  1. a stored leaf's 8 corners have values (f, or at a leaf as fine as
- *     rule b goes, the bridged f: iso.h) and these change sign (min < 0 <
- *     max, or a zero beside a non-zero);
+ *  1. a stored leaf's 8 corners are valid and their f values change sign
+ *     (min < 0 < max, or a zero beside a non-zero);
  *  2. a corner key (integer coordinates at max_depth) names one stored
  *     corner; leaves sharing a grid point share its index;
  *  3. nodes[0] is the root; every stored inner node has a child or a
@@ -32,7 +29,6 @@
 #include <omp.h>
 #include <string.h>
 
-#include "accel/cover_grid.h"
 #include "core/alloc.h"
 #include "core/key_slots.h"
 #include "surface/iso_int.h"
@@ -60,24 +56,6 @@ static const float DROP_DIAGONALS = 1.5f;
 #define REF_POSITIVE 0xFFFFFFFEu
 #define REF_LEAF 0x80000000u
 
-/* A bridged corner's splats must agree on a normal: |sum w_i n_i| >= this
- * x sum w_i (about 25 degrees of spread; a sphere's gap spreads them by
- * 2 x 2 r / R). */
-static const float BRIDGE_AGREE = 0.9f;
-
-/* ... and lie around it: their weighted mean, along the surface, within
- * this many of their mean (widened) radii of the corner. Over a half-disc
- * (a corner on a rim) the mean lies about 0.4 radii in; a corner in a gap
- * between splats has them all round. */
-static const float BRIDGE_BALANCE = 0.25f;
-
-/* Flags of an evaluated point (part.pl). */
-enum {
-    PT_LAYERED = 1, /* f of layered corners (corner_field)                     */
-    PT_TRIED = 2,   /* invalid, and its bridged value has been asked for        */
-    PT_BRIDGED = 4  /* ... and it has one: pf, pn hold it (never valid: iso.h)  */
-};
-
 /* Slack of the ball-touches-box test: a splat whose kernel is non-zero at a
  * point of the box (|x - p|^2 / r^2 < 1 in float) must pass it. */
 static const float TOUCH_SLACK = 1.0001f;
@@ -85,8 +63,6 @@ static const float TOUCH_SLACK = 1.0001f;
 typedef struct build_ctx {
     const sg_pointset *ps;
     const uint32_t *key; /* layer keys per splat (layers.h); NULL: none keyed */
-    const sg_pointset *wide;          /* ps with radii x SG_ISO_BRIDGE_RADII */
-    const sg_cover_grid *wide_grid;   /* its supports (bridged corners)      */
     sg_kernel kernel;
     int max_depth;
     float tol, leaf_radii;
@@ -112,7 +88,7 @@ typedef struct part {
     size_t list_n;           /* its splats, at scratch[0..list_n)        */
     tnode *nodes; size_t nn, ncap;
     tleaf *leaves; size_t nl, lcap;
-    uint64_t *pkey; float *pf; sg_vec3 *pn; uint8_t *pl; size_t np, pcap; /* evaluated points (pl: PT_ flags) */
+    uint64_t *pkey; float *pf; sg_vec3 *pn; uint8_t *pl; size_t np, pcap; /* evaluated points (pl: layered) */
     uint32_t *hash; size_t hcap; /* open addressing: slot + 1, 0 = empty   */
     uint32_t *scratch; size_t sn, scap;
     uint32_t root;           /* ref of the task cell                     */
@@ -370,60 +346,6 @@ static inline sg_vec3 grid_point(const build_ctx *c, uint32_t x, uint32_t y, uin
     return sg_v3(iso_coord(c->lo.x, c->unit, x), iso_coord(c->lo.y, c->unit, y), iso_coord(c->lo.z, c->unit, z));
 }
 
-/* The bridged value of grid point q (iso.h SG_ISO_BRIDGE_RADII): the
- * field over the widened supports that cover it, found in a grid of the
- * whole point set so that q gets one value whichever cell asks. NAN where
- * none covers it, and where the splats there do not lie on one sheet: a
- * layered (keyed) splat among them, or normals that disagree (their
- * weighted mean shorter than BRIDGE_AGREE). Across a thin wall, a slab or
- * a fold one field over both sides gives a plane of neither: measured on
- * the stability map's thin wall, 5.7% of the hits from behind and its
- * light +9% without these tests, and bumps inside the room's 0.2-thick
- * floor (test_iso sites_rays_leave_floor). */
-static float bridged_field(const build_ctx *c, sg_vec3 q, sg_vec3 *n)
-{
-    size_t count;
-    const uint32_t *idx = sg_cover_grid_at(c->wide_grid, q, &count);
-    const sg_pointset *w = c->wide;
-    *n = sg_v3(0, 0, 0);
-    for (size_t k = 0; c->key && k < count; ++k) {
-        const uint32_t i = idx[k];
-        const float dx = q.x - w->px[i], dy = q.y - w->py[i], dz = q.z - w->pz[i];
-        if (c->key[i] && dx * dx + dy * dy + dz * dz < w->radius[i] * w->radius[i])
-            return NAN;
-    }
-    /* the widened supports' weight, mean offset, normal and reach at q */
-    float W = 0.0f, R = 0.0f;
-    sg_vec3 D = {0, 0, 0}, N = {0, 0, 0};
-    for (size_t k = 0; k < count; ++k) {
-        const uint32_t i = idx[k];
-        const sg_vec3 d = sg_v3_sub(sg_pointset_position(w, i), q);
-        const float d2 = sg_v3_dot(d, d), r = w->radius[i];
-        if (!(d2 < r * r))
-            continue; /* most of the cell's list: outside the support */
-        const float wt = sg_mls_kernel(c->kernel, sqrtf(d2) / r);
-        if (!(wt > 0.0f))
-            continue;
-        W += wt;
-        R += wt * r;
-        D = sg_v3_madd(D, d, wt);
-        N = sg_v3_madd(N, sg_pointset_normal(w, i), wt);
-    }
-    const float ln = sg_v3_length(N);
-    if (!(W > 0.0f) || !(ln >= BRIDGE_AGREE * W))
-        return NAN;
-    /* a gap has splats around q; a rim only on one side, which pulls their
-     * mean away along the surface: the surface ends there, as MLS's does */
-    const sg_vec3 u = sg_v3_scale(N, 1.0f / ln), off = sg_v3_scale(D, 1.0f / W);
-    const sg_vec3 along = sg_v3_madd(off, u, -sg_v3_dot(off, u));
-    if (!(sg_v3_length(along) <= BRIDGE_BALANCE * R / W))
-        return NAN;
-    /* f = (q - p̄) . n̄, the field's normalised form (sg_iso_field) over
-     * these weights */
-    *n = u;
-    return -sg_v3_dot(off, u);
-}
-
 /* Slot of grid point (x, y, z) in the part's point table, evaluating f
  * there from the list scratch[off..off+n) the first time. UINT32_MAX when
  * out of memory. */
@@ -449,45 +371,9 @@ static uint32_t point_slot(const build_ctx *c, part *P, size_t off, size_t n, ui
     }
     uint32_t s = (uint32_t)P->np++;
     P->pkey[s] = key;
-    uint8_t layered;
-    P->pf[s] = corner_field(c, P->scratch + off, n, grid_point(c, x, y, z), &P->pn[s], &layered);
-    P->pl[s] = layered ? PT_LAYERED : 0;
+    P->pf[s] = corner_field(c, P->scratch + off, n, grid_point(c, x, y, z), &P->pn[s], &P->pl[s]);
     P->hash[j] = s + 1;
     return s;
-}
-
-/* Whether point slot s (grid point x, y, z) has a value: valid, or its
- * bridged one, computed the first time a cell asks (bridged_field's value
- * is the point's alone, so which cell asks first changes nothing). */
-static int bridge_slot(const build_ctx *c, part *P, uint32_t s, uint32_t x, uint32_t y, uint32_t z)
-{
-    if (!isnan(P->pf[s]) || (P->pl[s] & PT_TRIED))
-        return !isnan(P->pf[s]);
-    P->pl[s] |= PT_TRIED;
-    P->pf[s] = bridged_field(c, grid_point(c, x, y, z), &P->pn[s]);
-    if (!isnan(P->pf[s]))
-        P->pl[s] |= PT_BRIDGED;
-    return !isnan(P->pf[s]);
-}
-
-/* Whether a splat of list[0..n) would meet the box [a, b] with its disk
- * widened to the bridge's reach (SG_ISO_BRIDGE_RADII) but thickened as
- * before: a cell in a gap between the disks, on the surface; one above or
- * below the surface is not. */
-static int wide_disk_touches_any(const build_ctx *c, const uint32_t *list, size_t n, sg_vec3 a, sg_vec3 b)
-{
-    const sg_pointset *ps = c->ps;
-    sg_vec3 mid = sg_v3_scale(sg_v3_add(a, b), 0.5f), e = sg_v3_scale(sg_v3_sub(b, a), 0.5f);
-    for (size_t k = 0; k < n; ++k) {
-        const uint32_t i = list[k];
-        if (!ball_touches(c->wide, i, a, b))
-            continue;
-        sg_vec3 nn = sg_pointset_normal(ps, i);
-        float reach = e.x * fabsf(nn.x) + e.y * fabsf(nn.y) + e.z * fabsf(nn.z);
-        if (fabsf(sg_v3_dot(nn, sg_v3_sub(mid, sg_pointset_position(ps, i)))) <= reach + SG_ISO_SLAB * ps->radius[i])
-            return 1;
-    }
-    return 0;
 }
 
 /* Trilinear patch of corner values v at the 27 points of the 3x3x3
@@ -513,30 +399,10 @@ static uint32_t push_node(tnode **nodes, size_t *nn, size_t *ncap, const uint32_
     return (uint32_t)(*nn)++;
 }
 
-/* The splat of list[0..count) nearest x (the first of equals). */
-static uint32_t nearest_splat(const sg_pointset *ps, const uint32_t *list, size_t count, sg_vec3 x)
-{
-    float best = INFINITY;
-    uint32_t near = list[0];
-    for (size_t k = 0; k < count; ++k) {
-        sg_vec3 d = sg_v3_sub(sg_pointset_position(ps, list[k]), x);
-        float d2 = sg_v3_dot(d, d);
-        if (d2 < best) {
-            best = d2;
-            near = list[k];
-        }
-    }
-    return near;
-}
-
 /* Builds the cell at (x, y, z), level `level`, whose splat list is
- * scratch[off..off+n); returns its ref. gap_rmin > 0: the cell is a child
- * of one that follows the supports' edge (rule b), of that one's r_min,
- * and a widened disk meets it; if no splat's thick disk does, it lies in
- * a gap between the supports there, and is a leaf of bridged values or
- * nothing (without this, such gaps between small disks stayed holes). */
+ * scratch[off..off+n); returns its ref. */
 static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, uint32_t z, int level, size_t off,
-                           size_t n, float gap_rmin)
+                           size_t n)
 {
     const sg_pointset *ps = c->ps;
     uint32_t size = 1u << (c->max_depth - level);
@@ -547,19 +413,15 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
         if (ps->radius[i] < r_min && disk_touches(ps, i, a, b))
             r_min = ps->radius[i];
     }
-    const int gap = r_min == INFINITY;
-    if (gap && !(gap_rmin > 0.0f))
+    if (r_min == INFINITY)
         return REF_EMPTY; /* no splat's thick disk meets the cell */
-    if (gap)
-        r_min = gap_rmin;
     float edge = b.x - a.x;
-    int can_split = !gap && level < c->max_depth;
+    int can_split = level < c->max_depth;
     int split = can_split && edge > c->leaf_radii * r_min; /* rule a */
     uint32_t cs[8];
     float fv[8];
-    int rule_b = 0; /* split by rule b: following the supports' edge */
     if (!split) {
-        int valid = 0; /* corners with f (a bridged value is not valid) */
+        int valid = 0;
         for (int k = 0; k < 8; ++k) {
             cs[k] = point_slot(c, P, off, n, x + (k & 1 ? size : 0), y + (k & 2 ? size : 0), z + (k & 4 ? size : 0));
             if (cs[k] == UINT32_MAX) {
@@ -567,7 +429,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
                 return REF_EMPTY;
             }
             fv[k] = P->pf[cs[k]];
-            valid += !isnan(fv[k]) && !(P->pl[cs[k]] & PT_BRIDGED);
+            valid += !isnan(fv[k]);
         }
         /* rules b and c refine at most FINE_LEVELS levels below rule a's
          * size: f has kinks (the kernels' support edges, opposed normals
@@ -575,7 +437,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
          * down to max_depth */
         int layered = 0;
         for (int k = 0; k < 8; ++k)
-            layered |= P->pl[cs[k]] & PT_LAYERED;
+            layered |= P->pl[cs[k]];
         int fine = can_split && edge > (layered ? EDGE_FINE_EDGE : FINE_EDGE) * c->leaf_radii * r_min;
         if (valid == 8) {
             /* f is close to a distance (|grad f| ~ 1 near the surface):
@@ -593,7 +455,6 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
         if (valid < 8) {
             /* rule b: follow the surface towards the supports' edge */
             split = fine && valid > 0;
-            rule_b = split;
         } else if (fine) {
             /* at a layered cell, rule c also splits where two corners'
              * normals are more than 60 degrees apart (from two layers): f
@@ -618,73 +479,45 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
                     return REF_EMPTY;
                 }
                 float e = fabsf(P->pf[s] - patch_at(fv, ga, gb, gc));
-                if (!(e <= c->tol * r_min) || (P->pl[s] & PT_BRIDGED)) /* NaN or bridged: as invalid */
+                if (!(e <= c->tol * r_min)) /* NaN (invalid point) splits too */
                     split = 1;
             }
         }
         if (!split) {
-            /* Where rule b has gone as fine as it may, a cell whose corners
-             * lie outside the supports takes their bridged values; only a
-             * corner without even that is invalid and keeps the cell out
-             * (never intersected: iso.h). Everywhere else bridged values
-             * count as invalid, so the octree is the one without the
-             * bridge but for these cells. */
-            if (valid < 8) {
-                /* valid corners of one sign, all farther than the cell's
-                 * diagonal from the surface (|grad f| ~ 1): no zero inside
-                 * whatever the others' bridged values; most cells at the
-                 * supports' edge above or below a surface */
-                float near = INFINITY, lo = INFINITY, hi = -INFINITY;
-                for (int k = 0; k < 8; ++k)
-                    if (!isnan(fv[k]) && !(P->pl[cs[k]] & PT_BRIDGED)) {
-                        near = fminf(near, fabsf(fv[k]));
-                        lo = fminf(lo, fv[k]);
-                        hi = fmaxf(hi, fv[k]);
-                    }
-                if (valid > 0 && (lo > 0.0f || hi < 0.0f) && near > 1.7320508f * edge)
-                    return REF_EMPTY;
-            }
-            for (int k = 0; k < 8; ++k)
-                if (!bridge_slot(c, P, cs[k], x + (k & 1 ? size : 0), y + (k & 2 ? size : 0), z + (k & 4 ? size : 0)))
-                    return REF_EMPTY;
-            for (int k = 0; k < 8; ++k)
-                fv[k] = P->pf[cs[k]];
+            if (valid < 8)
+                return REF_EMPTY; /* an invalid corner: never intersected (iso.h) */
             float lo = fv[0], hi = fv[0];
             for (int k = 1; k < 8; ++k) {
                 lo = fminf(lo, fv[k]);
                 hi = fmaxf(hi, fv[k]);
             }
-            /* no zero in the patch (invariant 1); positive only with valid
-             * corners (a bridged cell without a surface stays empty, as
-             * before the bridge) */
             if (!(lo <= 0.0f && hi >= 0.0f && (lo < 0.0f || hi > 0.0f)))
-                return lo > 0.0f && valid == 8 ? REF_POSITIVE : REF_EMPTY;
+                return lo > 0.0f ? REF_POSITIVE : REF_EMPTY; /* no zero in the patch (invariant 1) */
             if (!grow((void **)&P->leaves, &P->lcap, P->nl + 1, sizeof *P->leaves)) {
                 P->nomem = 1;
                 return REF_EMPTY;
             }
             tleaf *L = &P->leaves[P->nl];
             memcpy(L->corner, cs, sizeof cs);
-            /* the splat nearest the centre (first of equals: lists ascend);
-             * a cell in a gap may have no splat in its list: then among the
-             * widened supports there (a bridged corner had some) */
+            /* the splat nearest the centre (first of equals: lists ascend) */
             sg_vec3 m = sg_v3_scale(sg_v3_add(a, b), 0.5f);
-            const uint32_t *list = P->scratch + off;
-            size_t count = n;
-            if (count == 0)
-                list = sg_cover_grid_at(c->wide_grid, m, &count);
-            for (int k = 0; k < 8 && count == 0; ++k)
-                list = sg_cover_grid_at(c->wide_grid, sg_v3(k & 1 ? b.x : a.x, k & 2 ? b.y : a.y, k & 4 ? b.z : a.z),
-                                        &count);
-            assert(count > 0); /* a bridged corner has widened supports in its cell */
-            L->splat = nearest_splat(ps, list, count, m);
+            float best = INFINITY;
+            L->splat = P->scratch[off];
+            for (size_t k = 0; k < n; ++k) {
+                uint32_t i = P->scratch[off + k];
+                sg_vec3 d = sg_v3_sub(sg_pointset_position(ps, i), m);
+                float d2 = sg_v3_dot(d, d);
+                if (d2 < best) {
+                    best = d2;
+                    L->splat = i;
+                }
+            }
             if (level > P->depth)
                 P->depth = level;
             return REF_LEAF | (uint32_t)P->nl++;
         }
     }
     /* subdivide: each child's list is filtered onto the top of the stack */
-    const float child_gap = rule_b ? r_min : 0.0f;
     uint32_t kids[8];
     int any = 0, positive = 0;
     uint32_t hs = size / 2;
@@ -703,11 +536,7 @@ static uint32_t build_cell(const build_ctx *c, part *P, uint32_t x, uint32_t y, 
                 P->scratch[top + m++] = i;
         }
         P->sn = top + m;
-        /* a child no thick disk meets may lie in a gap of the supports
-         * (build_cell's gap_rmin) if a widened disk of the cell's splats
-         * meets it */
-        float gap = child_gap > 0.0f && wide_disk_touches_any(c, P->scratch + off, n, ca, cb) ? child_gap : 0.0f;
-        kids[k] = m || gap > 0.0f ? build_cell(c, P, cx, cy, cz, level + 1, top, m, gap) : REF_EMPTY;
+        kids[k] = m ? build_cell(c, P, cx, cy, cz, level + 1, top, m) : REF_EMPTY;
         P->sn = top;
         if (P->nomem)
             return REF_EMPTY;
@@ -1002,9 +831,6 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     uint32_t *all = sg_alloc_array(ps->count, sizeof *all);
     uint32_t *key = sg_alloc_array(ps->count, sizeof *key);
     top T = {0};
-    sg_pointset wide;
-    float *wide_radius = NULL;
-    sg_cover_grid wide_grid = {0};
     if (!iso || !all || !key) {
         st = sg_error_set(err, SG_ERR_NOMEM, "sg_iso_create: out of memory for %zu splats", ps->count);
         goto fail;
@@ -1023,19 +849,6 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
         key = NULL;
     }
     c.key = key;
-    /* the widened supports of bridged corners (iso.h SG_ISO_BRIDGE_RADII) */
-    wide = *ps;
-    wide.radius = wide_radius = sg_alloc_array(ps->count, sizeof *wide_radius);
-    if (!wide_radius) {
-        st = sg_error_set(err, SG_ERR_NOMEM, "sg_iso_create: out of memory for %zu splats", ps->count);
-        goto fail;
-    }
-    for (size_t i = 0; i < ps->count; ++i)
-        wide_radius[i] = SG_ISO_BRIDGE_RADII * ps->radius[i];
-    if ((st = sg_cover_grid_build(ps, SG_ISO_BRIDGE_RADII, &wide_grid, err)) != SG_OK)
-        goto fail;
-    c.wide = &wide;
-    c.wide_grid = &wide_grid;
     iso->lo = c.lo;
     iso->edge = edge;
     iso->unit = c.unit;
@@ -1054,7 +867,7 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(| : nomem)
     for (size_t p = 0; p < T.np; ++p) {
         part *P = &T.parts[p];
-        P->root = build_cell(&c, P, P->ix, P->iy, P->iz, levels, 0, P->list_n, 0.0f);
+        P->root = build_cell(&c, P, P->ix, P->iy, P->iz, levels, 0, P->list_n);
         nomem |= P->nomem;
     }
     if (nomem) {
@@ -1074,8 +887,6 @@ sg_status sg_iso_create(const sg_iso_desc *desc, const sg_pointset *ps, sg_iso *
     sg_free(T.parts);
     sg_free(T.nodes);
     sg_free(key);
-    sg_free(wide_radius);
-    sg_cover_grid_free(&wide_grid);
 
     sg_iso_info *in = &iso->info;
     in->point_count = ps->count;
@@ -1103,8 +914,6 @@ fail:
     sg_free(T.nodes);
     sg_free(all);
     sg_free(key);
-    sg_free(wide_radius);
-    sg_cover_grid_free(&wide_grid);
     sg_iso_destroy(iso);
     return st;
 }

@@ -335,28 +335,6 @@ static void test_iso_agrees_with_mls_bumpy(void **state)
     sg_pointset_free(&ps);
 }
 
-/* Rays at the centre of the unit sphere from 20000 random points at
- * distance 3 (seed rng): how many miss; *worst gets the largest |t - 2|
- * of those that hit. */
-static int rays_at_centre(const sg_iso *iso, uint64_t rng, float *worst)
-{
-    int misses = 0;
-    *worst = 0.0f;
-    for (int i = 0; i < 20000; ++i) {
-        sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
-        sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
-        sg_hit hit;
-        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
-            if (misses < 5)
-                fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
-            ++misses;
-            continue;
-        }
-        *worst = fmaxf(*worst, fabsf(hit.t - 2.0f));
-    }
-    return misses;
-}
-
 /* 4. No holes in a closed sphere: every ray aimed at the centre from
  * outside hits (20000 random directions). */
 static void test_iso_sphere_no_holes(void **state)
@@ -365,39 +343,20 @@ static void test_iso_sphere_no_holes(void **state)
     sg_pointset ps = {0};
     make_sphere(&ps, 50000);
     sg_iso *iso = build_iso(&ps, 0);
-    float worst;
-    int misses = rays_at_centre(iso, 3, &worst);
+    uint64_t rng = 3;
+    int misses = 0;
+    for (int i = 0; i < 20000; ++i) {
+        sg_vec3 from = sg_v3_scale(sg_test_random_dir(&rng), 3.0f);
+        sg_ray ray = make_ray(from, sg_v3_scale(from, -1.0f), SG_RAY_FRONT_ONLY);
+        sg_hit hit;
+        if (!sg_iso_intersect(iso, &ray, &hit, NULL)) {
+            if (misses < 5)
+                fprintf(stderr, "miss from (%g %g %g)\n", (double)from.x, (double)from.y, (double)from.z);
+            ++misses;
+        }
+    }
     if (misses)
         fail_msg("%d of 20000 rays at the centre missed", misses);
-    sg_iso_destroy(iso);
-    sg_pointset_free(&ps);
-}
-
-/* 4b. Gaps between supports are bridged (iso.h SG_ISO_BRIDGE_RADII): the
- * sphere of test 4 with every radius cut to 0.35 of its value (a third
- * of the spacing: the supports no longer overlap, the stability map's
- * radii_small) is still closed: every ray at the centre hits, at the
- * sphere. Without the bridge about 30% of them went through. */
-static void test_iso_sparse_supports_bridged(void **state)
-{
-    (void)state;
-    sg_pointset ps = {0};
-    make_sphere(&ps, 20000);
-    for (size_t i = 0; i < ps.count; ++i)
-        ps.radius[i] *= 0.35f;
-    float r = max_radius(&ps);
-    sg_iso *iso = build_iso(&ps, 0);
-    float worst;
-    int misses = rays_at_centre(iso, 5, &worst);
-    /* depth: the splats' planes are tangent to the sphere, so the MLS
-     * surface lies within the sagitta of the widened support, (2 r)^2 / 2,
-     * of it, plus the patch's tolerance (0.05 r_min) */
-    float bound = 2.0f * r * r + 0.05f * r;
-    printf("sparse supports (r = %g): %d of 20000 rays missed, worst |t - 2| %g (bound %g)\n", (double)r, misses,
-           (double)worst, (double)bound);
-    if (misses || !(worst <= bound))
-        fail_msg("sparse supports: %d of 20000 rays at the centre missed, worst depth error %g (bound %g)", misses,
-                 (double)worst, (double)bound);
     sg_iso_destroy(iso);
     sg_pointset_free(&ps);
 }
@@ -513,16 +472,13 @@ static void test_iso_holes_stay_open(void **state)
 
 /* 7. Quantisation within its stated bound (iso.h): every corner of the
  * sampled leaves against f and n̄ recomputed from all splats in index
- * order (the build's bits: iso.h sg_iso_field; a bridged corner's over
- * the widened supports), and the normal codec on random unit vectors; on
- * the sphere, and on the sphere with its radii cut to 0.35 (test 4b),
- * whose gaps are bridged. */
-static void quantisation_bound(float radius_scale)
+ * order (the build's bits: iso.h sg_iso_field), and the normal codec on
+ * random unit vectors. */
+static void test_iso_quantisation_bound(void **state)
 {
+    (void)state;
     sg_pointset ps = {0};
     make_sphere(&ps, 5000);
-    for (size_t i = 0; i < ps.count; ++i)
-        ps.radius[i] *= radius_scale;
     sg_iso *iso = build_iso(&ps, 0);
     sg_iso_info info;
     sg_iso_get_info(iso, &info);
@@ -532,15 +488,8 @@ static void quantisation_bound(float radius_scale)
     assert_non_null(all);
     for (size_t i = 0; i < ps.count; ++i)
         all[i] = (uint32_t)i;
-    /* the bridged corners' field: the same splats with widened supports */
-    sg_pointset wide = ps;
-    wide.radius = malloc(ps.count * sizeof *wide.radius);
-    assert_non_null(wide.radius);
-    for (size_t i = 0; i < ps.count; ++i)
-        wide.radius[i] = SG_ISO_BRIDGE_RADII * ps.radius[i];
     sg_iso_leaf_boxes(iso, boxes);
     float worst_f = 0, worst_n = 0, fmax = 0;
-    int bridged = 0;
     for (size_t l = 0; l < info.leaf_count; l += 5) {
         float f[8];
         sg_vec3 n[8];
@@ -550,10 +499,6 @@ static void quantisation_bound(float radius_scale)
             sg_vec3 x = sg_v3(c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z);
             sg_vec3 nt;
             float ft = sg_iso_field(&ps, all, ps.count, SG_KERNEL_HAT, x, &nt);
-            if (isnan(ft)) {
-                ft = sg_iso_field(&wide, all, ps.count, SG_KERNEL_HAT, x, &nt);
-                ++bridged;
-            }
             assert_false(isnan(ft)); /* stored corners are valid */
             worst_f = fmaxf(worst_f, fabsf(ft - f[c]));
             fmax = fmaxf(fmax, fabsf(ft));
@@ -574,29 +519,19 @@ static void quantisation_bound(float radius_scale)
         sg_vec3 m = sg_iso_decode_normal(sg_iso_encode_normal(special[i]));
         worst_codec = fmaxf(worst_codec, angle(special[i], m));
     }
-    printf("quantisation (radii x %g): worst |df| %g (bound %g, f_scale %g), worst normal %g, codec %g (bound %g); "
-           "%d bridged corners\n",
-           (double)radius_scale, (double)worst_f, (double)ftol, (double)info.f_scale, (double)worst_n,
-           (double)worst_codec, (double)SG_ISO_NORMAL_EPS, bridged);
-    assert_true(radius_scale == 1.0f ? bridged == 0 : bridged > 100);
+    printf("quantisation: worst |df| %g (bound %g, f_scale %g), worst normal %g, codec %g (bound %g)\n",
+           (double)worst_f, (double)ftol, (double)info.f_scale, (double)worst_n, (double)worst_codec,
+           (double)SG_ISO_NORMAL_EPS);
     /* the corners' normals: the codec's bound plus float rounding of the
      * normalisation (a few ulps) */
     float ntol = SG_ISO_NORMAL_EPS + 1e-6f;
     if (worst_f > ftol || worst_n > ntol || worst_codec > SG_ISO_NORMAL_EPS)
         fail_msg("quantisation: |df| %g (bound %g), corner normal %g (bound %g), codec %g (bound %g)", (double)worst_f,
                  (double)ftol, (double)worst_n, (double)ntol, (double)worst_codec, (double)SG_ISO_NORMAL_EPS);
-    free(wide.radius);
     free(all);
     free(boxes);
     sg_iso_destroy(iso);
     sg_pointset_free(&ps);
-}
-
-static void test_iso_quantisation_bound(void **state)
-{
-    (void)state;
-    quantisation_bound(1.0f);
-    quantisation_bound(0.35f);
 }
 
 /* 8. Face flags: from the centre of a sphere, FRONT_ONLY sees no entry
@@ -1431,7 +1366,6 @@ int main(void)
         cmocka_unit_test(test_iso_intersect16_matches_single_bunny),
         cmocka_unit_test(test_iso_lod_against_full_detail),
         cmocka_unit_test(test_iso_sphere_no_holes),
-        cmocka_unit_test(test_iso_sparse_supports_bridged),
         cmocka_unit_test(test_iso_no_cracks_along_faces),
         cmocka_unit_test(test_iso_holes_stay_open),
         cmocka_unit_test(test_iso_quantisation_bound),
