@@ -11,8 +11,9 @@
  * holds x. The cells are kept in a hash on their packed indices (a model
  * is a surface: most of its box's cells are empty).
  *
- * Users: the layer keys (layers.c, scale 1: the splats covering p_i) and
- * the ISO's bridged corners (iso_build.c, scale SG_ISO_BRIDGE_RADII).
+ * Users: the layer keys (layers.c, scale 1: the splats covering p_i).
+ * Stop 32's gap bridge for the ISO queried widened supports (scale 2) at
+ * arbitrary points through it (reverted; docs/iso.md).
  *
  * Ownership: build allocates, sg_cover_grid_free releases; the point set
  * is read during the build only. Queries are read-only: any number of
