@@ -36,9 +36,10 @@ static void node_sites(node_walk *w, uint32_t q, uint32_t x, uint32_t y, uint32_
 {
     const sg_iso *iso = w->iso;
     const iso_node *N = &iso->nodes[q];
+    const uint32_t hs = size >> 1;
     w->node_site[q] = SG_INVALID_ID;
     if (N->lod.leaf != ISO_NO_LOD) {
-        const uint32_t id = w->next++, h = size >> 1, sp = iso->leaves[N->lod.leaf].splat;
+        const uint32_t id = w->next++, sp = iso->leaves[N->lod.leaf].splat;
         /* the cell's centre moved along the stored normal onto the plane
          * n . p = d, clamped into the cell (an oblique plane may pass the
          * centre far off: the site names where the node's surface is, no
@@ -47,8 +48,8 @@ static void node_sites(node_walk *w, uint32_t q, uint32_t x, uint32_t y, uint32_
         const sg_vec3 lo = sg_v3(iso_coord(iso->lo.x, u, x), iso_coord(iso->lo.y, u, y), iso_coord(iso->lo.z, u, z));
         const sg_vec3 hi = sg_v3(iso_coord(iso->lo.x, u, x + size), iso_coord(iso->lo.y, u, y + size),
                                  iso_coord(iso->lo.z, u, z + size));
-        const sg_vec3 c = sg_v3(iso_coord(iso->lo.x, u, x + h), iso_coord(iso->lo.y, u, y + h),
-                                iso_coord(iso->lo.z, u, z + h));
+        const sg_vec3 c = sg_v3(iso_coord(iso->lo.x, u, x + hs), iso_coord(iso->lo.y, u, y + hs),
+                                iso_coord(iso->lo.z, u, z + hs));
         const sg_vec3 qn = iso_lod_normal(&N->lod), n = sg_v3_normalize(qn);
         const sg_vec3 on = sg_v3_madd(c, qn, (N->lod.d - sg_v3_dot(qn, c)) / sg_v3_dot(qn, qn));
         const sg_vec3 p = sg_v3_min(sg_v3_max(on, lo), hi);
@@ -60,7 +61,6 @@ static void node_sites(node_walk *w, uint32_t q, uint32_t x, uint32_t y, uint32_
         w->splat[id] = sp;
         w->node_site[q] = id;
     }
-    const uint32_t hs = size >> 1;
     unsigned inner = 0;
     for (unsigned k = 0; k < 8; ++k)
         if ((N->child_mask >> k & 1u) && !(N->leaf_mask >> k & 1u))
